@@ -1,0 +1,303 @@
+"""Robot description: a serial arm as frozen, validated data.
+
+A robot is a TOML file (see ``model/robots/*.toml``). :func:`load_description`
+parses and validates it once into a :class:`RobotDescription`; everything
+else in the workbench reads only that object.
+
+Conventions (those of the Robotics Toolbox):
+
+* Standard Denavit-Hartenberg: ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``.
+  For a revolute joint ``theta_i = q_i + theta`` (offset), for a prismatic one
+  ``d_i = q_i + d``.
+* Centre of mass and inertia of link i are given in frame i, the frame at the
+  far end of link i; inertia is about the centre of mass, ordered
+  ``[Ixx, Iyy, Izz, Ixy, Iyz, Ixz]``.
+* Motor data are on the motor side: ``motor angle = G * q``; rotor inertia
+  ``Jm``, viscous friction ``B`` and Coulomb friction ``Tc`` reflect to the
+  joint as ``G^2 Jm``, ``G^2 B`` and ``|G| Tc``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+__all__ = [
+    "LinkDescription",
+    "RobotDescription",
+    "RobotDescriptionError",
+    "InertiaConsistencyWarning",
+    "load_description",
+    "description_from_dict",
+    "BUILTIN_DIR",
+    "BUILTIN_ROBOTS",
+    "JOINT_TYPES",
+]
+
+BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
+BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560")
+JOINT_TYPES = ("revolute", "prismatic")
+
+
+class RobotDescriptionError(ValueError):
+    """A robot description is invalid; the message names file, link, field, value and expectation."""
+
+
+class InertiaConsistencyWarning(UserWarning):
+    """A link inertia is positive semi-definite but breaks the triangle inequality."""
+
+
+@dataclass(frozen=True)
+class LinkDescription:
+    """One link and its joint, base to tip. Units: m, rad, kg, kg m^2, N m s/rad, N m."""
+
+    joint: str
+    a: float
+    alpha: float
+    d: float
+    theta: float
+    mass: float = 0.0
+    com: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    inertia: tuple[float, float, float, float, float, float] = (0.0,) * 6
+    motor_inertia: float = 0.0
+    gear_ratio: float = 1.0
+    viscous_friction: float = 0.0
+    coulomb_friction: tuple[float, float] = (0.0, 0.0)
+    qlim: tuple[float, float] | None = None
+    name: str = ""
+    # Rotor body for motor_model="full": the rotor of motor i is carried by link i-1
+    # (the base for i = 1), spins about its joint axis, mass rotor_mass (kg) at the
+    # joint-i origin. Its inertia about the spin axis is motor_inertia.
+    rotor_mass: float = 0.0
+
+    @property
+    def is_revolute(self) -> bool:
+        return self.joint == "revolute"
+
+    @property
+    def inertia_matrix(self) -> np.ndarray:
+        """(3, 3) inertia about the centre of mass, frame i axes, kg m^2."""
+        ixx, iyy, izz, ixy, iyz, ixz = self.inertia
+        return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """A serial arm: DH links, gravity and metadata; validated on construction."""
+
+    name: str
+    links: tuple[LinkDescription, ...]
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    rest: tuple[float, ...] | None = None
+    description: str = ""
+    source: str = ""
+    path: str = ""
+    extra: Mapping[str, Any] = field(default_factory=dict, compare=False, hash=False)
+
+    @property
+    def n(self) -> int:
+        return len(self.links)
+
+    @property
+    def q_rest(self) -> np.ndarray:
+        """Rest configuration (m or rad per joint); zeros if the file gives none."""
+        return np.zeros(self.n) if self.rest is None else np.array(self.rest, dtype=float)
+
+    @property
+    def joint_types(self) -> str:
+        """One letter per joint, 'R' or 'P' (e.g. 'RRPR' for the SCARA)."""
+        return "".join("R" if link.is_revolute else "P" for link in self.links)
+
+    @property
+    def qlim(self) -> np.ndarray:
+        """(2, n) joint limits; +-inf where a link states none."""
+        lo = [-math.inf if lk.qlim is None else lk.qlim[0] for lk in self.links]
+        hi = [math.inf if lk.qlim is None else lk.qlim[1] for lk in self.links]
+        return np.array([lo, hi])
+
+    def digest(self) -> str:
+        """SHA-256 of the physical content (not name/path/metadata): the cache key of generated code."""
+        payload = {
+            "gravity": self.gravity,
+            "links": [
+                {k: v for k, v in dataclasses.asdict(lk).items() if k not in ("name", "qlim")}
+                for lk in self.links
+            ],
+        }
+        text = json.dumps(payload, sort_keys=True, default=float)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+# --------------------------------------------------------------------------- parsing
+
+_TOP_REQUIRED = ("name", "links")
+_TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks")
+_LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
+_LINK_OPTIONAL = (
+    "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
+    "coulomb_friction", "qlim", "name", "rotor_mass", "source",
+)
+
+
+class _Where:
+    """Builds error messages that name the file, the link and the field."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path or "<dict>"
+
+    def fail(self, link: int | None, fieldname: str, value: Any, expected: str) -> RobotDescriptionError:
+        where = f"{self.path}"
+        if link is not None:
+            where += f", link {link + 1}"
+        return RobotDescriptionError(f"{where}: field '{fieldname}' = {value!r}: expected {expected}")
+
+
+def _number(w: _Where, link: int | None, name: str, value: Any, *, nonneg: bool = False, nonzero: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise w.fail(link, name, value, "a number")
+    x = float(value)
+    if not math.isfinite(x):
+        raise w.fail(link, name, value, "a finite number")
+    if nonneg and x < 0:
+        raise w.fail(link, name, value, "a number >= 0")
+    if nonzero and x == 0:
+        raise w.fail(link, name, value, "a non-zero number")
+    return x
+
+
+def _vector(w: _Where, link: int | None, name: str, value: Any, size: int) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)) or len(value) != size:
+        raise w.fail(link, name, value, f"a list of {size} numbers")
+    return tuple(_number(w, link, f"{name}[{i}]", v) for i, v in enumerate(value))
+
+
+def _check_keys(w: _Where, link: int | None, data: Mapping[str, Any], required: Sequence[str], optional: Sequence[str]) -> None:
+    for key in required:
+        if key not in data:
+            raise w.fail(link, key, None, "this required key (it is missing)")
+    for key in data:
+        if key not in required and key not in optional:
+            allowed = ", ".join((*required, *optional))
+            raise w.fail(link, key, data[key], f"one of the known keys ({allowed}); this key is unknown")
+
+
+def _inertia(w: _Where, link: int, value: Any) -> tuple[float, ...]:
+    inertia = _vector(w, link, "inertia", value, 6)
+    ixx, iyy, izz, ixy, iyz, ixz = inertia
+    matrix = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    scale = max(1.0, float(np.abs(matrix).max()))
+    eig = np.linalg.eigvalsh(matrix)
+    if eig.min() < -1e-12 * scale:
+        raise w.fail(link, "inertia", value, f"a positive semi-definite inertia (its eigenvalues are {eig.round(12).tolist()})")
+    tol = 1e-12 * scale
+    if eig[0] + eig[1] < eig[2] - tol:
+        warnings.warn(
+            f"{w.path}, link {link + 1}: field 'inertia' = {list(value)!r} breaks the triangle inequality "
+            f"(principal moments {eig.round(9).tolist()}): no rigid body has it; using it as given",
+            InertiaConsistencyWarning, stacklevel=4,
+        )
+    return inertia
+
+
+def _link(w: _Where, i: int, data: Any) -> LinkDescription:
+    if not isinstance(data, Mapping):
+        raise w.fail(i, "links", data, "a table of link fields")
+    _check_keys(w, i, data, _LINK_REQUIRED, _LINK_OPTIONAL)
+    joint = data["joint"]
+    if joint not in JOINT_TYPES:
+        raise w.fail(i, "joint", joint, "'revolute' or 'prismatic'")
+    kw: dict[str, Any] = {"joint": joint}
+    for key in ("a", "alpha", "d", "theta"):
+        kw[key] = _number(w, i, key, data[key])
+    kw["mass"] = _number(w, i, "mass", data.get("mass", 0.0), nonneg=True)
+    kw["com"] = _vector(w, i, "com", data.get("com", [0.0, 0.0, 0.0]), 3)
+    kw["inertia"] = _inertia(w, i, data.get("inertia", [0.0] * 6))
+    kw["motor_inertia"] = _number(w, i, "motor_inertia", data.get("motor_inertia", 0.0), nonneg=True)
+    kw["gear_ratio"] = _number(w, i, "gear_ratio", data.get("gear_ratio", 1.0), nonzero=True)
+    kw["viscous_friction"] = _number(w, i, "viscous_friction", data.get("viscous_friction", 0.0), nonneg=True)
+    tc = data.get("coulomb_friction", 0.0)
+    if isinstance(tc, (list, tuple)):
+        pos, neg = _vector(w, i, "coulomb_friction", tc, 2)
+        if pos < 0 or neg > 0:
+            raise w.fail(i, "coulomb_friction", tc, "[Tc_pos, Tc_neg] with Tc_pos >= 0 and Tc_neg <= 0")
+    else:
+        pos = _number(w, i, "coulomb_friction", tc, nonneg=True)
+        neg = -pos
+    kw["coulomb_friction"] = (pos, neg)
+    if "qlim" in data:
+        lo, hi = _vector(w, i, "qlim", data["qlim"], 2)
+        if not lo < hi:
+            raise w.fail(i, "qlim", data["qlim"], "[lower, upper] with lower < upper")
+        kw["qlim"] = (lo, hi)
+    if "name" in data:
+        if not isinstance(data["name"], str):
+            raise w.fail(i, "name", data["name"], "a string")
+        kw["name"] = data["name"]
+    kw["rotor_mass"] = _number(w, i, "rotor_mass", data.get("rotor_mass", 0.0), nonneg=True)
+    return LinkDescription(**kw)
+
+
+def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescription:
+    """Validate a parsed TOML document (or an equivalent dict) into a :class:`RobotDescription`.
+
+    Raises
+    ------
+    RobotDescriptionError
+        Naming the file, the link (1-based), the field, the value and what was expected.
+    """
+    w = _Where(path)
+    if not isinstance(data, Mapping):
+        raise w.fail(None, "<document>", data, "a TOML table")
+    _check_keys(w, None, data, _TOP_REQUIRED, _TOP_OPTIONAL)
+    name = data["name"]
+    if not isinstance(name, str) or not name:
+        raise w.fail(None, "name", name, "a non-empty string")
+    raw_links = data["links"]
+    if not isinstance(raw_links, list) or not raw_links:
+        raise w.fail(None, "links", raw_links, "at least one [[links]] table")
+    links = tuple(_link(w, i, lk) for i, lk in enumerate(raw_links))
+    gravity = _vector(w, None, "gravity", data.get("gravity", [0.0, 0.0, -9.81]), 3)
+    rest = None
+    if "rest" in data:
+        rest = _vector(w, None, "rest", data["rest"], len(links))
+    for key in ("description", "source"):
+        if key in data and not isinstance(data[key], str):
+            raise w.fail(None, key, data[key], "a string")
+    extra = {k: data[k] for k in ("units", "tasks") if k in data}
+    return RobotDescription(
+        name=name, links=links, gravity=gravity, rest=rest,  # type: ignore[arg-type]
+        description=data.get("description", ""), source=data.get("source", ""),
+        path=str(path), extra=extra,
+    )
+
+
+def load_description(name_or_path: str | Path) -> RobotDescription:
+    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`) or a TOML file by path."""
+    text_name = str(name_or_path)
+    if text_name in BUILTIN_ROBOTS:
+        path = BUILTIN_DIR / f"{text_name}.toml"
+    else:
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise RobotDescriptionError(
+                f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; no such file"
+            )
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise RobotDescriptionError(f"{path}: not valid TOML: {exc}") from exc
+    return description_from_dict(data, str(path))

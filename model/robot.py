@@ -1,0 +1,192 @@
+"""The :class:`Robot`: one object a user holds, with the Robotics Toolbox's method names.
+
+It owns a validated :class:`~model.description.RobotDescription` and the
+CasADi Functions built from it; each method is a thin, shape-checked call into
+the module that does the work (kinematics, ik, singularity, dynamics), so the
+algorithms stay free functions that can be tested on their own.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+
+from .description import RobotDescription, load_description
+from .kinematics import KinematicsFunctions, build_kinematics
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .dynamics import Dynamics
+    from .ik import IKResult, IKSolution
+    from .singularity import SingularityReport
+
+__all__ = ["Robot", "load_robot", "as_joint_vector"]
+
+
+def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
+    """``value`` as a float array of shape (n,); a clear ValueError naming ``name`` otherwise."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (n,):
+        arr = arr.reshape(-1) if arr.size == n else arr
+        if arr.shape != (n,):
+            raise ValueError(f"{name}: expected {n} joint values, got an array of shape {np.shape(value)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
+    return arr
+
+
+def _as_pose(T: Any) -> np.ndarray:
+    arr = np.asarray(T, dtype=float)
+    if arr.shape != (4, 4):
+        raise ValueError(f"T: expected a (4, 4) homogeneous transform, got shape {arr.shape}")
+    return arr
+
+
+class Robot:
+    """A serial manipulator: description, kinematics, inverse kinematics and dynamics.
+
+    Parameters
+    ----------
+    description
+        The validated robot description.
+    motor_model
+        ``"reflected"`` (Robotics Toolbox convention, default) or ``"full"``
+        (rotors as bodies carried by the preceding link); affects dynamics only.
+    """
+
+    def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
+        if motor_model not in ("reflected", "full"):
+            raise ValueError(f"motor_model: expected 'reflected' or 'full', got {motor_model!r}")
+        self.description = description
+        self.motor_model = motor_model
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, n={self.n}, joints={self.description.joint_types!r}, motor_model={self.motor_model!r})"
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def name(self) -> str:
+        return self.description.name
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.description.n
+
+    @property
+    def qlim(self) -> np.ndarray:
+        """(2, n) joint limits, rad or m; +-inf where none is stated."""
+        return self.description.qlim
+
+    @property
+    def q_rest(self) -> np.ndarray:
+        """(n,) rest configuration, rad or m."""
+        return self.description.q_rest
+
+    @property
+    def gear_ratio(self) -> np.ndarray:
+        """(n,) reduction ratios G (motor angle = G q)."""
+        return np.array([lk.gear_ratio for lk in self.description.links])
+
+    def _q(self, q: Any, name: str = "q") -> np.ndarray:
+        return as_joint_vector(q, self.n, name)
+
+    # -------------------------------------------------------------- kinematics
+    @cached_property
+    def kinematics(self) -> KinematicsFunctions:
+        """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe``."""
+        return build_kinematics(self.description)
+
+    def fkine(self, q: Any) -> np.ndarray:
+        """(4, 4) pose ``T_0E`` of the end-effector frame in the base frame; q in rad / m."""
+        return np.array(self.kinematics.fkine(self._q(q)))
+
+    def fkine_all(self, q: Any) -> np.ndarray:
+        """(n+1, 4, 4) poses of the base frame and of every link frame, in the base frame."""
+        stacked = np.array(self.kinematics.fkine_all(self._q(q)))
+        return stacked.reshape(self.n + 1, 4, 4)
+
+    def jacob0(self, q: Any) -> np.ndarray:
+        """(6, n) geometric Jacobian, rows [v; w], base-frame axes (m/s and rad/s per joint rate)."""
+        return np.array(self.kinematics.jacob0(self._q(q)))
+
+    def jacobe(self, q: Any) -> np.ndarray:
+        """(6, n) geometric Jacobian, rows [v; w], end-effector-frame axes."""
+        return np.array(self.kinematics.jacobe(self._q(q)))
+
+    # ----------------------------------------------------------- singularities
+    def manipulability(self, q: Any, axes: Sequence[bool] | str = "all") -> float:
+        """Yoshikawa manipulability ``sqrt(det(J J^T))`` of the rows of ``jacob0`` chosen by ``axes``."""
+        from .singularity import manipulability
+
+        return manipulability(self, self._q(q), axes)
+
+    def singularities(self, q: Any, tol: float = 1e-6) -> "SingularityReport":
+        """Whether ``q`` is singular, why, and the joint motion that loses effect."""
+        from .singularity import singularities
+
+        return singularities(self, self._q(q), tol)
+
+    # ------------------------------------------------------ inverse kinematics
+    def ikine_a(self, T: Any) -> "list[IKSolution]":
+        """Every closed-form IK solution of pose ``T`` (4, 4), each labelled with its branch."""
+        from .ik import ikine_a
+
+        return ikine_a(self, _as_pose(T))
+
+    def ikine(self, T: Any, q0: Any = None, mask: Sequence[float] | None = None, **options: Any) -> "IKResult":
+        """Numeric IK (Levenberg-Marquardt) of pose ``T``; see :func:`model.ik.ikine` for options."""
+        from .ik import ikine
+
+        q0v = None if q0 is None else self._q(q0, "q0")
+        return ikine(self, _as_pose(T), q0=q0v, mask=mask, **options)
+
+    # ---------------------------------------------------------------- dynamics
+    @cached_property
+    def dynamics(self) -> "Dynamics":
+        """The dynamic model (symbolic CasADi Functions and compiled C); built on first use."""
+        from .dynamics import Dynamics
+
+        return Dynamics(self.description, motor_model=self.motor_model)
+
+    def inertia(self, q: Any) -> np.ndarray:
+        """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included."""
+        return self.dynamics.inertia(self._q(q))
+
+    def coriolis(self, q: Any, qd: Any) -> np.ndarray:
+        """(n, n) Coriolis/centrifugal matrix C(q, qd) from Christoffel symbols."""
+        return self.dynamics.coriolis(self._q(q), self._q(qd, "qd"))
+
+    def gravload(self, q: Any) -> np.ndarray:
+        """(n,) gravity torque g(q): the joint torque that holds the arm still."""
+        return self.dynamics.gravload(self._q(q))
+
+    def friction(self, qd: Any) -> np.ndarray:
+        """(n,) friction torque F(qd) the joints must overcome: G^2 B qd + |G| Tc(sign qd).
+
+        Note the sign: the Robotics Toolbox's ``Link.friction`` returns ``-F``.
+        """
+        return self.dynamics.friction(self._q(qd, "qd"))
+
+    def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+        """(n,) joint torques for the motion (inverse dynamics), motor and friction terms included."""
+        return self.dynamics.rne(self._q(q), self._q(qd, "qd"), self._q(qdd, "qdd"))
+
+    def accel(self, q: Any, qd: Any, tau: Any) -> np.ndarray:
+        """(n,) joint accelerations under joint torques ``tau`` (forward dynamics)."""
+        return self.dynamics.accel(self._q(q), self._q(qd, "qd"), self._q(tau, "tau"))
+
+    def rne_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
+        """(N, n) inverse dynamics of N states given as (N, n) arrays."""
+        return self.dynamics.rne_batch(Q, QD, QDD)
+
+    def accel_batch(self, Q: Any, QD: Any, TAU: Any) -> np.ndarray:
+        """(N, n) forward dynamics of N states given as (N, n) arrays."""
+        return self.dynamics.accel_batch(Q, QD, TAU)
+
+
+def load_robot(name_or_path: str | Path, motor_model: str = "reflected") -> Robot:
+    """A :class:`Robot` from a built-in name (:data:`model.BUILTIN_ROBOTS`) or a TOML path."""
+    return Robot(load_description(name_or_path), motor_model=motor_model)

@@ -1,0 +1,90 @@
+"""``manip``: the workbench's command line.
+
+Each package registers its own sub-commands (``register(subparsers)`` in its
+``commands`` module); this module only assembles them and turns expected
+errors into a one-line message and exit status 2 instead of a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Sequence
+
+import numpy as np
+
+import model
+from model.description import RobotDescriptionError
+
+__all__ = ["main", "build_parser", "UsageError"]
+
+
+class UsageError(ValueError):
+    """Bad command-line input; printed as one line, exit status 2."""
+
+
+def _cmd_robots(args: argparse.Namespace) -> int:
+    for name in model.BUILTIN_ROBOTS:
+        desc = model.load_description(name)
+        print(f"{name:<10} {desc.n} joints ({desc.joint_types:<6})  {desc.description}")
+    return 0
+
+
+def format_info(desc: model.RobotDescription) -> str:
+    """The DH table with units, then inertial and motor data, as plain text."""
+    deg = 180.0 / np.pi
+    lines = [f"{desc.name}: {desc.description}", f"source: {desc.source}" if desc.source else "",
+             f"gravity [m/s^2]: {list(desc.gravity)}", f"rest q: {desc.q_rest.tolist()}", "",
+             "Standard DH, A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha); q adds to theta (R) or d (P)",
+             f"{'j':>2} {'type':<9} {'a [m]':>9} {'alpha [deg]':>11} {'d [m]':>9} {'theta [deg]':>11} {'qlim':>22}"]
+    for i, lk in enumerate(desc.links, 1):
+        if lk.qlim is None:
+            lim = "-"
+        elif lk.is_revolute:
+            lim = f"[{lk.qlim[0] * deg:.1f}, {lk.qlim[1] * deg:.1f}] deg"
+        else:
+            lim = f"[{lk.qlim[0]:.3f}, {lk.qlim[1]:.3f}] m"
+        lines.append(f"{i:>2} {lk.joint:<9} {lk.a:>9.4f} {lk.alpha * deg:>11.2f} {lk.d:>9.4f} {lk.theta * deg:>11.2f} {lim:>22}")
+    lines += ["", "Inertial data (centre of mass and inertia in frame i, inertia about the centre of mass)",
+              f"{'j':>2} {'m [kg]':>8} {'com [m]':>26} {'[Ixx Iyy Izz Ixy Iyz Ixz] [kg m^2]':>44}"]
+    for i, lk in enumerate(desc.links, 1):
+        com = "[" + ", ".join(f"{c:.4g}" for c in lk.com) + "]"
+        inertia = "[" + ", ".join(f"{c:.4g}" for c in lk.inertia) + "]"
+        lines.append(f"{i:>2} {lk.mass:>8.4g} {com:>26} {inertia:>44}")
+    lines += ["", "Motor data (motor side; motor angle = G q)",
+              f"{'j':>2} {'Jm [kg m^2]':>12} {'G':>10} {'B [N m s/rad]':>14} {'Tc+ [N m]':>10} {'Tc- [N m]':>10} {'G^2 Jm':>10}"]
+    for i, lk in enumerate(desc.links, 1):
+        lines.append(f"{i:>2} {lk.motor_inertia:>12.4g} {lk.gear_ratio:>10.6g} {lk.viscous_friction:>14.4g} "
+                     f"{lk.coulomb_friction[0]:>10.4g} {lk.coulomb_friction[1]:>10.4g} {lk.gear_ratio ** 2 * lk.motor_inertia:>10.4g}")
+    return "\n".join(line for line in lines)
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    print(format_info(model.load_description(args.robot)))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="manip", description="Model, control and export robot manipulators.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    p = sub.add_parser("robots", help="list the built-in robots")
+    p.set_defaults(func=_cmd_robots)
+    p = sub.add_parser("info", help="print a robot's DH table, inertial and motor data")
+    p.add_argument("robot", help="built-in name or TOML file")
+    p.set_defaults(func=_cmd_info)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``manip`` console command; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (UsageError, RobotDescriptionError, ValueError, FileNotFoundError) as exc:
+        print(f"manip {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
