@@ -9,14 +9,29 @@ from .description import (
     load_description,
 )
 from .robot import Robot, load_robot
+from .tasks import BUILTIN_TASKS, PICK_AND_PLACE, Task, WaypointError, load_waypoints, pick_and_place
+from .trajectory import JointPath, Trajectory, ctraj, jtraj, straight_line, trapezoidal, via_points
 
 __all__ = [
     "BUILTIN_ROBOTS",
+    "BUILTIN_TASKS",
     "InertiaConsistencyWarning",
+    "JointPath",
     "LinkDescription",
+    "PICK_AND_PLACE",
     "Robot",
     "RobotDescription",
     "RobotDescriptionError",
+    "Task",
+    "Trajectory",
+    "WaypointError",
+    "ctraj",
+    "jtraj",
     "load_description",
     "load_robot",
+    "load_waypoints",
+    "pick_and_place",
+    "straight_line",
+    "trapezoidal",
+    "via_points",
 ]

@@ -23,6 +23,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import types
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -105,7 +106,7 @@ class RobotDescription:
     description: str = ""
     source: str = ""
     path: str = ""
-    extra: Mapping[str, Any] = field(default_factory=dict, compare=False, hash=False)
+    extra: Mapping[str, Any] = field(default_factory=lambda: types.MappingProxyType({}), compare=False, hash=False)
 
     @property
     def n(self) -> int:
@@ -236,7 +237,7 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription:
     else:
         pos = _number(w, i, "coulomb_friction", tc, nonneg=True)
         neg = -pos
-    kw["coulomb_friction"] = (pos, neg)
+    kw["coulomb_friction"] = (pos + 0.0, neg + 0.0)  # + 0.0 turns -0.0 into 0.0: one digest per physics
     if "qlim" in data:
         lo, hi = _vector(w, i, "qlim", data["qlim"], 2)
         if not lo < hi:
@@ -273,10 +274,13 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
     rest = None
     if "rest" in data:
         rest = _vector(w, None, "rest", data["rest"], len(links))
+        for i, (value, link) in enumerate(zip(rest, links)):
+            if link.qlim is not None and not link.qlim[0] <= value <= link.qlim[1]:
+                raise w.fail(i, "rest", value, f"a rest position within qlim [{link.qlim[0]}, {link.qlim[1]}]")
     for key in ("description", "source"):
         if key in data and not isinstance(data[key], str):
             raise w.fail(None, key, data[key], "a string")
-    extra = {k: data[k] for k in ("units", "tasks") if k in data}
+    extra = types.MappingProxyType({k: data[k] for k in ("units", "tasks") if k in data})
     return RobotDescription(
         name=name, links=links, gravity=gravity, rest=rest,  # type: ignore[arg-type]
         description=data.get("description", ""), source=data.get("source", ""),

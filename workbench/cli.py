@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from typing import Sequence
 
 import numpy as np
 
 import model
+from control_design.commands import register as register_control
 from model.description import RobotDescriptionError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -72,11 +74,17 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("info", help="print a robot's DH table, inertial and motor data")
     p.add_argument("robot", help="built-in name or TOML file")
     p.set_defaults(func=_cmd_info)
+    register_control(sub)
     return parser
+
+
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    return f"manip: warning: {message}\n"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``manip`` console command; returns the exit status."""
+    warnings.formatwarning = _one_line_warning
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

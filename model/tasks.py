@@ -1,0 +1,311 @@
+"""Named joint-space tasks: built-in ones and waypoint files.
+
+A :class:`Task` is a list of joint-space waypoints for one robot, visited in
+order with one duration per segment; :meth:`Task.trajectory` turns it into a
+sampled :class:`~model.trajectory.Trajectory` (quintic per segment, stopping at
+every waypoint, by default).
+
+The built-in task is the SCARA pick-and-place of the seed report 000:
+
+>>> from model.tasks import pick_and_place
+>>> traj = pick_and_place()          # 5 segments of 3 s, sampled every 10 ms
+>>> float(traj.t[-1]), traj.n_segments
+(15.0, 5)
+
+Waypoint files (:func:`load_waypoints`) are TOML (``waypoints = [[...], ...]``,
+optional ``segment_time`` in s) or CSV (one joint vector per line, optional
+header line and ``#`` comments), validated against the robot's joint count and
+joint limits. Units: rad for revolute joints, m for prismatic ones.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from .description import RobotDescription, load_description
+from .trajectory import Trajectory, via_points
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+__all__ = [
+    "Task",
+    "WaypointError",
+    "PICK_AND_PLACE",
+    "BUILTIN_TASKS",
+    "pick_and_place",
+    "load_waypoints",
+    "check_waypoints",
+]
+
+_HALF_PI = 0.5 * math.pi
+
+
+class WaypointError(ValueError):
+    """Waypoints are unreadable or invalid for the robot; the message names the source, row and joint."""
+
+
+@dataclass(frozen=True, eq=False)
+class Task:
+    """Joint-space waypoints of one robot, visited in order.
+
+    Attributes
+    ----------
+    name
+        Task name.
+    robot
+        Built-in robot name (or TOML path) the waypoints are meant for.
+    waypoints
+        (K+1, n) joint vectors, rad or m, start first.
+    labels
+        K+1 names of the waypoints (e.g. ``"B (pick)"``).
+    segment_time
+        Default duration of every segment, s.
+    description
+        One line on what the task does and where it comes from.
+    """
+
+    name: str
+    robot: str
+    waypoints: npt.NDArray[np.float64]
+    labels: tuple[str, ...]
+    segment_time: float
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        w = np.array(self.waypoints, dtype=float)
+        w.setflags(write=False)
+        object.__setattr__(self, "waypoints", w)
+        if len(self.labels) != w.shape[0]:
+            raise ValueError(f"labels: expected {w.shape[0]} labels, one per waypoint, got {len(self.labels)}")
+
+    @property
+    def n_segments(self) -> int:
+        """Number of segments (waypoints - 1)."""
+        return int(self.waypoints.shape[0] - 1)
+
+    def trajectory(self, dt: float = 0.01, segment_time: float | Sequence[float] | None = None,
+                   profile: str = "quintic", t0: float = 0.0) -> Trajectory:
+        """Sample the task: one ``profile`` segment per pair of waypoints, stopping at each.
+
+        Parameters
+        ----------
+        dt
+            Sampling period, s.
+        segment_time
+            Segment duration(s), s; default :attr:`segment_time`.
+        profile
+            ``"quintic"`` or ``"trapezoidal"`` (see :func:`model.trajectory.via_points`).
+        t0
+            Start time, s.
+        """
+        times = self.segment_time if segment_time is None else segment_time
+        return via_points(self.waypoints, times, dt, t0=t0, profile=profile)
+
+
+#: The seed's SCARA pick-and-place in joint space (theta1, theta2, d3, theta4).
+#: qC and qD have theta2 = 0: the arm is stretched (a kinematic singularity), harmless in joint space.
+PICK_AND_PLACE = Task(
+    name="pick_and_place",
+    robot="scara",
+    waypoints=np.array([
+        [0.0, 0.0, 1.0, 0.0],            # rest
+        [_HALF_PI, _HALF_PI, 1.0, 0.0],  # qA, above the pick point
+        [_HALF_PI, _HALF_PI, 3.0, 0.0],  # qB, pick
+        [_HALF_PI, _HALF_PI, 1.0, 0.0],  # qA
+        [_HALF_PI, 0.0, 1.0, 0.0],       # qC, above the place point
+        [_HALF_PI, 0.0, 3.0, 0.0],       # qD, place
+    ]),
+    labels=("rest", "A", "B (pick)", "A", "C", "D (place)"),
+    segment_time=3.0,
+    description="SCARA pick-and-place of seed report 000: quintic joint segments of 3 s, stop at each waypoint",
+)
+
+#: Built-in tasks by name.
+BUILTIN_TASKS: dict[str, Task] = {PICK_AND_PLACE.name: PICK_AND_PLACE}
+
+
+def _description(robot: str | Path | RobotDescription) -> RobotDescription:
+    return robot if isinstance(robot, RobotDescription) else load_description(robot)
+
+
+def check_waypoints(waypoints: npt.ArrayLike, robot: str | Path | RobotDescription, where: str) -> npt.NDArray[np.float64]:
+    """Check waypoints against a robot: at least 2 rows, n finite values each, inside qlim.
+
+    Parameters
+    ----------
+    waypoints
+        (K+1, n) joint vectors, rad or m.
+    robot
+        Built-in robot name, TOML path or description.
+    where
+        Source named in error messages (file path or task name).
+
+    Returns
+    -------
+    (K+1, n) float array.
+
+    Raises
+    ------
+    WaypointError
+        Naming ``where``, the row and joint (1-based), the value and the limit.
+    """
+    desc = _description(robot)
+    rows = waypoints.tolist() if isinstance(waypoints, np.ndarray) else list(waypoints)  # type: ignore[arg-type]
+    if len(rows) < 2:
+        raise WaypointError(f"{where}: expected at least 2 waypoints, got {len(rows)}")
+    qlim = desc.qlim
+    for r, row in enumerate(rows, 1):
+        if not isinstance(row, (list, tuple)):
+            raise WaypointError(f"{where} row {r}: expected a list of {desc.n} joint values, got {row!r}")
+        if len(row) != desc.n:
+            raise WaypointError(f"{where} row {r}: expected {desc.n} joint values for robot {desc.name!r}, got {len(row)}")
+        for j, value in enumerate(row):
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise WaypointError(f"{where} row {r}, joint {j + 1}: expected a number, got {value!r}")
+            x = float(value)
+            unit = "rad" if desc.links[j].is_revolute else "m"
+            if not math.isfinite(x):
+                raise WaypointError(f"{where} row {r}, joint {j + 1}: expected a finite value, got {x!r}")
+            lo, hi = qlim[0, j], qlim[1, j]
+            if not lo <= x <= hi:
+                raise WaypointError(f"{where} row {r}, joint {j + 1}: {x:g} {unit} outside qlim [{lo:g}, {hi:g}]")
+    return np.array(rows, dtype=float)
+
+
+def pick_and_place(robot: str | Path | RobotDescription = "scara", segment_time: float = 3.0,
+                   dt: float = 0.01, profile: str = "quintic") -> Trajectory:
+    """The seed's SCARA pick-and-place as a sampled joint trajectory.
+
+    rest [0 0 1 0] -> qA [pi/2 pi/2 1 0] -> qB [pi/2 pi/2 3 0] (pick) -> qA ->
+    qC [pi/2 0 1 0] -> qD [pi/2 0 3 0] (place), in (theta1 rad, theta2 rad, d3 m,
+    theta4 rad); each segment a quintic of ``segment_time`` s, stopping at each waypoint.
+
+    Parameters
+    ----------
+    robot
+        A SCARA-like 4-joint robot (name, TOML path or description) whose limits the
+        waypoints are checked against; default the built-in ``"scara"``.
+    segment_time
+        Duration of each of the 5 segments, s.
+    dt
+        Sampling period, s.
+    profile
+        ``"quintic"`` (the seed's) or ``"trapezoidal"``.
+
+    Raises
+    ------
+    WaypointError
+        The robot does not have 4 joints or a waypoint is outside its limits.
+    """
+    task = PICK_AND_PLACE
+    desc = _description(robot)
+    check_waypoints(task.waypoints, desc, f"{task.name} (robot {desc.name!r})")
+    return task.trajectory(dt=dt, segment_time=segment_time, profile=profile)
+
+
+_TOML_KEYS = ("waypoints", "segment_time", "description", "labels")
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise WaypointError(f"{path}: not valid TOML: {exc}") from exc
+    for key in data:
+        if key not in _TOML_KEYS:
+            raise WaypointError(f"{path}: unknown key {key!r}; expected one of {', '.join(_TOML_KEYS)}")
+    if "waypoints" not in data:
+        raise WaypointError(f"{path}: missing key 'waypoints' (a list of joint vectors)")
+    rows = data["waypoints"]
+    if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
+        raise WaypointError(f"{path}: 'waypoints' = {rows!r}: expected a list of joint vectors [[...], ...]")
+    return data
+
+
+def _read_csv(path: Path) -> list[list[Any]]:
+    rows: list[list[Any]] = []
+    with open(path, newline="") as fh:
+        lines = [ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")]
+    for i, fields in enumerate(csv.reader(lines)):
+        cells = [c.strip() for c in fields]
+        parsed: list[Any] = []
+        for c in cells:
+            try:
+                parsed.append(float(c))
+            except ValueError:
+                parsed.append(c)
+        if i == 0 and all(isinstance(c, str) for c in parsed):
+            continue  # header line of joint names
+        rows.append(parsed)
+    return rows
+
+
+def load_waypoints(path: str | Path, robot: str | Path | RobotDescription = "scara",
+                   segment_time: float | None = None) -> Task:
+    """Read joint-space waypoints from a TOML or CSV file and check them against a robot.
+
+    Parameters
+    ----------
+    path
+        ``*.toml`` with ``waypoints = [[q1, ..., qn], ...]`` and optional
+        ``segment_time`` (s), ``description``, ``labels``; or ``*.csv`` with one joint
+        vector per line (optional header of joint names, ``#`` comments).
+        Rows are numbered from 1, header and comments not counted.
+    robot
+        Built-in robot name, TOML path or description.
+    segment_time
+        Segment duration, s; overrides the file's; default 3 s if neither gives one.
+
+    Returns
+    -------
+    Task
+
+    Raises
+    ------
+    WaypointError
+        Naming the file, the row and the joint: wrong joint count, not a number,
+        NaN/inf, outside qlim; bad TOML; an unknown file type.
+    FileNotFoundError
+        If ``path`` does not exist.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"{p}: no such waypoint file")
+    suffix = p.suffix.lower()
+    file_time: Any = None
+    description = f"waypoints from {p.name}"
+    labels: Any = None
+    if suffix == ".toml":
+        data = _read_toml(p)
+        rows: Any = data["waypoints"]
+        file_time = data.get("segment_time")
+        description = data.get("description", description)
+        labels = data.get("labels")
+    elif suffix == ".csv":
+        rows = _read_csv(p)
+    else:
+        raise WaypointError(f"{p}: expected a .toml or .csv waypoint file, got suffix {p.suffix!r}")
+    desc = _description(robot)
+    W = check_waypoints(rows, desc, str(p))
+    T = segment_time if segment_time is not None else file_time if file_time is not None else 3.0
+    if isinstance(T, bool) or not isinstance(T, (int, float)) or not math.isfinite(T) or T <= 0:
+        raise WaypointError(f"{p}: 'segment_time' = {T!r}: expected a duration > 0 s")
+    if labels is None:
+        labels = tuple(f"w{k}" for k in range(W.shape[0]))
+    elif not isinstance(labels, list) or len(labels) != W.shape[0] or not all(isinstance(s, str) for s in labels):
+        raise WaypointError(f"{p}: 'labels' = {labels!r}: expected {W.shape[0]} strings, one per waypoint")
+    if not isinstance(description, str):
+        raise WaypointError(f"{p}: 'description' = {description!r}: expected a string")
+    return Task(name=p.stem, robot=desc.name, waypoints=W, labels=tuple(labels),
+                segment_time=float(T), description=description)
