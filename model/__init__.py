@@ -8,11 +8,22 @@ from .description import (
     RobotDescriptionError,
     load_description,
 )
+from .clik import CLIKResult, clik, seed_clik_task
+from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
 from .robot import Robot, load_robot
+from .singularity import SingularityReport
 from .tasks import BUILTIN_TASKS, PICK_AND_PLACE, Task, WaypointError, load_waypoints, pick_and_place
 from .trajectory import JointPath, Trajectory, ctraj, jtraj, straight_line, trapezoidal, via_points
 
 __all__ = [
+    "CLIKResult",
+    "IKResult",
+    "IKSolution",
+    "NoClosedFormError",
+    "SingularityReport",
+    "WorkspaceError",
+    "clik",
+    "seed_clik_task",
     "BUILTIN_ROBOTS",
     "BUILTIN_TASKS",
     "InertiaConsistencyWarning",

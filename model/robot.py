@@ -117,8 +117,12 @@ class Robot:
         return np.array(self.kinematics.jacobe(self._q(q)))
 
     # ----------------------------------------------------------- singularities
-    def manipulability(self, q: Any, axes: Sequence[bool] | str = "all") -> float:
-        """Yoshikawa manipulability ``sqrt(det(J J^T))`` of the rows of ``jacob0`` chosen by ``axes``."""
+    def manipulability(self, q: Any, axes: Sequence[bool] | str = "task") -> float:
+        """Yoshikawa manipulability ``sqrt(det(J J^T))`` of the rows of ``jacob0`` chosen by ``axes``.
+
+        The default ``"task"`` uses the rows the structure controls (x, y, z, yaw for a SCARA),
+        so an arm with fewer than six joints does not read as always singular.
+        """
         from .singularity import manipulability
 
         return manipulability(self, self._q(q), axes)

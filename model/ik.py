@@ -1,0 +1,289 @@
+"""Inverse kinematics: closed form (:func:`ikine_a`) and numeric Levenberg-Marquardt (:func:`ikine`).
+
+Poses are ``T_0E``, the end frame in the base frame (4, 4), m and rad. The
+closed forms and the per-structure knowledge live in :mod:`model.closed_form`;
+closed-loop inverse kinematics along a path is in :mod:`model.clik`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .closed_form import (
+    IKSolution,
+    NoClosedFormError,
+    WorkspaceError,
+    closed_form_for,
+    require_closed_form,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .robot import Robot
+
+__all__ = [
+    "IKSolution",
+    "IKResult",
+    "WorkspaceError",
+    "NoClosedFormError",
+    "ikine_a",
+    "ikine",
+    "pose_error",
+    "default_mask",
+]
+
+_REPRODUCE_TOL = 1e-6
+#: Span of the random restarts of a joint without limits: rad (revolute) or m (prismatic).
+_FREE_SPAN = {True: (-math.pi, math.pi), False: (-1.0, 1.0)}
+
+
+def _check_pose(T: Any) -> np.ndarray:
+    arr = np.asarray(T, dtype=float)
+    if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"T: expected a finite (4, 4) homogeneous transform, got shape {arr.shape}")
+    R = arr[:3, :3]
+    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+        raise ValueError("T: expected a rotation block with orthonormal columns and det +1 (tolerance 1e-6)")
+    return arr
+
+
+def pose_error(T: np.ndarray, T_d: np.ndarray) -> np.ndarray:
+    """(6,) error of pose ``T`` from the desired ``T_d``, both (4, 4) in the base frame.
+
+    ``[p_d - p; w]`` with ``w`` the rotation vector (angle-axis, log map) of
+    ``R_d R^T``: the rotation that takes ``R`` to ``R_d``, base-frame axes. m, rad.
+    """
+    e = np.empty(6)
+    e[:3] = T_d[:3, 3] - T[:3, 3]
+    e[3:] = Rotation.from_matrix(T_d[:3, :3] @ T[:3, :3].T).as_rotvec()
+    return e
+
+
+# --------------------------------------------------------------------------- closed form
+
+
+def ikine_a(robot: "Robot", T: np.ndarray) -> list[IKSolution]:
+    """Every closed-form inverse-kinematics solution of pose ``T``.
+
+    Parameters
+    ----------
+    robot
+        A robot whose DH table matches a structure of :mod:`model.closed_form`
+        (scara, planar3r, planar2r, arm4, spherical, or the same geometry).
+    T
+        (4, 4) target pose ``T_0E``, m. Which of its components are used depends on
+        the structure (``ClosedForm.pose_components``): scara position and tool
+        heading; planar3r x, y and in-plane angle; arm4 position and hand axis;
+        planar2r and spherical the position only.
+
+    Returns
+    -------
+    list of IKSolution
+        One per branch, in a fixed order with fixed labels. Solutions outside the
+        joint limits are kept, with ``within_limits=False``. At the boundary of
+        the workspace two branches coincide and both are returned.
+
+    Raises
+    ------
+    NoClosedFormError
+        The robot matches no known structure.
+    WorkspaceError
+        The target is out of reach; the message says which distance or angle is
+        outside which range.
+    """
+    T = _check_pose(T)
+    form = require_closed_form(robot.description)
+    qlim = robot.qlim
+    out = []
+    for theta, label in form.solve(T):
+        q = form.to_q(theta)
+        within = bool(np.all(q >= qlim[0]) and np.all(q <= qlim[1]))
+        reproduced = float(np.abs(pose_error(robot.fkine(q), T)).max()) <= _REPRODUCE_TOL
+        out.append(IKSolution(q=q, branch=label, within_limits=within, reproduces_pose=reproduced))
+    return out
+
+
+# --------------------------------------------------------------------------- numeric
+
+
+@dataclass(frozen=True, eq=False)
+class IKResult:
+    """Outcome of the numeric :func:`ikine`.
+
+    Attributes
+    ----------
+    q
+        (n,) best joint values found, rad or m.
+    success
+        Whether the weighted residual fell below ``tol``.
+    iterations
+        Levenberg-Marquardt iterations, summed over all searches.
+    searches
+        Searches started (the first from ``q0``, then seeded random restarts).
+    residual
+        ``sqrt(e^T W e)`` at ``q``: the masked pose error (m and rad mixed).
+    reason
+        ``"converged"`` or why not, in words.
+    """
+
+    q: np.ndarray
+    success: bool
+    iterations: int
+    searches: int
+    residual: float
+    reason: str
+
+
+def default_mask(robot: "Robot") -> np.ndarray:
+    """(6,) default ``ikine`` weights on [x y z rx ry rz] for ``robot``.
+
+    The task of a recognised structure (e.g. x, y, z, yaw for a SCARA), all six for
+    any robot with 6 or more joints.
+
+    Raises
+    ------
+    ValueError
+        Fewer than 6 joints and no recognised structure: give a mask.
+    """
+    form = closed_form_for(robot.description)
+    if form is not None:
+        return np.array(form.ikine_mask)
+    if robot.n >= 6:
+        return np.ones(6)
+    raise ValueError(
+        f"mask: robot {robot.name!r} has {robot.n} joints and no recognised structure, so there is no default; "
+        f"give 6 weights on [x y z rx ry rz] that select the components to solve (at most {robot.n})"
+    )
+
+
+def _check_mask(mask: Sequence[float]) -> np.ndarray:
+    w = np.asarray(mask, dtype=float).reshape(-1)
+    if w.shape != (6,) or not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
+        raise ValueError(f"mask: expected 6 finite weights >= 0 on [x y z rx ry rz], not all 0; got {mask!r}")
+    return w
+
+
+def ikine(
+    robot: "Robot",
+    T: np.ndarray,
+    q0: np.ndarray | None = None,
+    mask: Sequence[float] | None = None,
+    *,
+    ilimit: int = 60,
+    slimit: int = 30,
+    tol: float = 1e-10,
+    damping: float = 1e-2,
+    joint_limits: bool = True,
+    seed: int = 0,
+) -> IKResult:
+    """Numeric inverse kinematics by Levenberg-Marquardt (damped least squares) with restarts.
+
+    Minimises ``e^T W e`` with ``e`` = :func:`pose_error` of ``fkine(q)`` from ``T``
+    (base frame) and ``W = diag(mask)``. Step ``dq = (J^T W J + lambda I)^-1 J^T W e``
+    with ``J = jacob0(q)``; lambda starts at ``damping`` and is divided by 10 after a
+    step that lowers the error, multiplied by 10 after one that does not.
+
+    Parameters
+    ----------
+    robot
+        The robot.
+    T
+        (4, 4) target pose ``T_0E``, m.
+    q0
+        (n,) first initial guess, rad or m; default the robot's rest configuration.
+    mask
+        6 weights >= 0 on the error [x y z rx ry rz]; default :func:`default_mask`.
+    ilimit
+        Iterations per search.
+    slimit
+        Searches: the first from ``q0``, the others from seeded uniform random
+        configurations within ``qlim`` (+-pi rad or +-1 m where a joint has none).
+    tol
+        Success when ``sqrt(e^T W e) < tol`` (m and rad).
+    damping
+        Initial Levenberg-Marquardt damping lambda (units of J^T W J).
+    joint_limits
+        Project every iterate into ``qlim``.
+    seed
+        Seed of the random restarts.
+
+    Returns
+    -------
+    IKResult
+        With ``success=False`` and the reason (best residual, joints at a limit,
+        likely out of reach) when no search converged.
+    """
+    T = _check_pose(T)
+    n = robot.n
+    W = _check_mask(default_mask(robot) if mask is None else mask)
+    q_start = robot.q_rest if q0 is None else np.asarray(q0, dtype=float).reshape(n)
+    qlim = robot.qlim
+    lo = np.where(np.isfinite(qlim[0]), qlim[0], [(_FREE_SPAN[lk.is_revolute][0]) for lk in robot.description.links])
+    hi = np.where(np.isfinite(qlim[1]), qlim[1], [(_FREE_SPAN[lk.is_revolute][1]) for lk in robot.description.links])
+    rng = np.random.default_rng(seed)
+
+    def project(q: np.ndarray) -> np.ndarray:
+        return np.clip(q, qlim[0], qlim[1]) if joint_limits else q
+
+    def weighted(q: np.ndarray) -> tuple[np.ndarray, float]:
+        e = pose_error(robot.fkine(q), T)
+        return e, float(e @ (W * e))
+
+    best_q, best_E = project(q_start), math.inf
+    iterations = 0
+    for search in range(max(1, slimit)):
+        q = project(q_start if search == 0 else rng.uniform(lo, hi))
+        e, E = weighted(q)
+        lam = damping
+        for _ in range(ilimit):
+            if math.sqrt(E) < tol:
+                break
+            iterations += 1
+            J = robot.jacob0(q)
+            JtW = J.T * W
+            dq = np.linalg.solve(JtW @ J + lam * np.eye(n), JtW @ e)
+            q_new = project(q + dq)
+            e_new, E_new = weighted(q_new)
+            if E_new < E:
+                q, e, E = q_new, e_new, E_new
+                lam = max(lam / 10.0, 1e-12)
+            else:
+                lam = min(lam * 10.0, 1e12)
+        if E < best_E:
+            best_q, best_E = q, E
+        if math.sqrt(E) < tol:
+            return IKResult(q=_tidy(robot, q, joint_limits), success=True, iterations=iterations,
+                            searches=search + 1, residual=math.sqrt(E), reason="converged")
+    return IKResult(q=best_q, success=False, iterations=iterations, searches=max(1, slimit),
+                    residual=math.sqrt(best_E), reason=_failure_reason(robot, T, best_q, W, best_E, tol, slimit, ilimit))
+
+
+def _tidy(robot: "Robot", q: np.ndarray, joint_limits: bool) -> np.ndarray:
+    """Revolute joints without limits wrapped to [-pi, pi]; others as found."""
+    q = q.copy()
+    for i, lk in enumerate(robot.description.links):
+        if lk.is_revolute and (lk.qlim is None or not joint_limits):
+            q[i] = math.remainder(q[i], 2.0 * math.pi)
+    return q
+
+
+def _failure_reason(robot: "Robot", T: np.ndarray, q: np.ndarray, W: np.ndarray, E: float,
+                    tol: float, slimit: int, ilimit: int) -> str:
+    e = pose_error(robot.fkine(q), T)
+    pos = float(np.linalg.norm(np.sqrt(W[:3]) * e[:3]))
+    rot = float(np.linalg.norm(np.sqrt(W[3:]) * e[3:]))
+    text = (f"no solution with residual < {tol:g} in {slimit} searches of {ilimit} iterations "
+            f"(from q0 and seeded random starts): best residual {math.sqrt(E):.3g}, "
+            f"position error {pos:.3g} m, rotation error {rot:.3g} rad on the masked components")
+    qlim = robot.qlim
+    at_limit = [i + 1 for i in range(robot.n)
+                if np.isfinite(qlim[0, i]) and (abs(q[i] - qlim[0, i]) < 1e-9 or abs(q[i] - qlim[1, i]) < 1e-9)]
+    if at_limit:
+        text += f"; joints {at_limit} end at a limit"
+    if math.sqrt(E) > 1e-3:
+        text += "; the target is probably outside the workspace"
+    return text
