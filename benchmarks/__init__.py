@@ -1,0 +1,1 @@
+"""Benchmarks: peers compared in the same run, ratios printed."""

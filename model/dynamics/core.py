@@ -1,0 +1,262 @@
+"""The :class:`Dynamics` of one robot: parameters, symbolic Functions and the fast numeric API.
+
+Numeric methods run compiled C (built on first use, or by :meth:`Dynamics.compile`,
+cached on disk by :mod:`model.codegen`); without a C compiler they fall back to
+CasADi's own evaluation and warn once.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+import warnings
+from functools import cached_property
+from pathlib import Path
+from typing import Any, Sequence
+
+import casadi as ca
+import numpy as np
+
+from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, build_library
+from ..description import RobotDescription
+from .motors import check_motor_model
+from .parameters import ParameterLayout, parameter_layout
+from .symbolic import COMPILED_FUNCTIONS, DynamicsFunctions, build_functions
+
+__all__ = ["Dynamics", "NoCompilerWarning", "source_fingerprint"]
+
+
+_MODEL_SOURCES = (
+    *sorted(Path(__file__).resolve().parent.glob("*.py")),
+    Path(__file__).resolve().parents[1] / "kinematics.py",
+)
+
+
+def source_fingerprint() -> str:
+    """SHA-256 of the modules that build the symbolic model: editing them invalidates cached libraries."""
+    h = hashlib.sha256()
+    for path in _MODEL_SOURCES:
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+class NoCompilerWarning(RuntimeWarning):
+    """No C compiler: the numeric API evaluates with CasADi (correct, but much slower)."""
+
+
+def _vector(value: Any, size: int, name: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (size,):
+        if arr.size == size and arr.ndim == 2 and 1 in arr.shape:
+            arr = arr.reshape(size)
+        else:
+            raise ValueError(f"{name}: expected {size} values (shape ({size},)), got shape {np.shape(value)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
+    return np.ascontiguousarray(arr)
+
+
+def _batch(value: Any, n: int, name: str) -> np.ndarray:
+    arr = np.ascontiguousarray(value, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != n:
+        raise ValueError(f"{name}: expected an (N, {n}) array, got shape {np.shape(value)}")
+    return arr
+
+
+class Dynamics:
+    """Dynamic model ``B(q) qdd + C(q, qd) qd + F(qd) + g(q) = tau`` of one robot.
+
+    Parameters
+    ----------
+    description
+        The robot; link inertial data are constants of the generated code.
+    motor_model
+        ``"reflected"`` (default, Robotics Toolbox) or ``"full"`` (rotors as bodies).
+
+    Notes
+    -----
+    Payload, friction and gravity are the parameter vector :attr:`p`; change
+    them with :meth:`set_payload`, :meth:`set_friction`, :meth:`set_gravity`
+    or :meth:`set_parameters` without rebuilding anything. Joint quantities are
+    in rad, m and their derivatives; torques in N m (revolute) or N (prismatic).
+    """
+
+    def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
+        self.description = description
+        self.motor_model = check_motor_model(motor_model)
+        self.n = description.n
+        self.layout: ParameterLayout = parameter_layout(description)
+        self._p = self.layout.defaults.copy()
+        self._library: CompiledLibrary | None = None
+        self._build_info: BuildInfo | None = None
+        self._fallback = False
+        self._lock = threading.Lock()
+
+    def __repr__(self) -> str:
+        state = "compiled" if self._library else ("casadi" if self._fallback else "not built")
+        return f"Dynamics({self.description.name!r}, motor_model={self.motor_model!r}, {state})"
+
+    # ------------------------------------------------------------ parameters
+    @property
+    def p(self) -> np.ndarray:
+        """(np,) copy of the current parameter vector (see :mod:`model.dynamics.parameters`)."""
+        return self._p.copy()
+
+    def set_parameters(self, p: Any) -> None:
+        """Replace the whole parameter vector (layout :attr:`layout`)."""
+        self._p = _vector(p, self.layout.size, "p")
+
+    def reset_parameters(self) -> None:
+        """Back to the description's friction and gravity, no payload."""
+        self._p = self.layout.defaults.copy()
+
+    def _set(self, field: str, value: np.ndarray) -> None:
+        p = self._p.copy()
+        p[self.layout.slices[field]] = value
+        self._p = p
+
+    def set_payload(self, mass: float, com: Sequence[float] = (0.0, 0.0, 0.0),
+                    inertia: Sequence[float] = (0.0,) * 6) -> None:
+        """Rigid payload fixed to frame n.
+
+        Parameters
+        ----------
+        mass
+            kg, >= 0 (0 removes the payload).
+        com
+            (3,) centre of mass in frame n, m.
+        inertia
+            (6,) ``[Ixx Iyy Izz Ixy Iyz Ixz]`` about the payload COM, frame-n axes, kg m^2 (zeros: point mass).
+        """
+        m = float(mass)
+        if not np.isfinite(m) or m < 0:
+            raise ValueError(f"mass: expected a finite number >= 0 kg, got {mass!r}")
+        c = _vector(com, 3, "com")
+        inertia6 = _vector(inertia, 6, "inertia")
+        ixx, iyy, izz, ixy, iyz, ixz = inertia6
+        eig = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
+        if eig[0] < -1e-12 * max(1.0, abs(eig).max()):
+            raise ValueError(f"inertia: expected a positive semi-definite inertia, got {inertia6.tolist()} (eigenvalues {eig.tolist()})")
+        self._set("payload_mass", np.array([m]))
+        self._set("payload_com", c)
+        self._set("payload_inertia", inertia6)
+
+    def set_friction(self, viscous: Any = None, coulomb_pos: Any = None, coulomb_neg: Any = None) -> None:
+        """Motor-side friction per joint: viscous (N m s/rad, >= 0), Coulomb Tc+ (>= 0) and Tc- (<= 0), N m.
+
+        Arguments left as None keep their current values.
+        """
+        checks = (
+            ("viscous", "viscous_friction", viscous, 1.0, ">= 0"),
+            ("coulomb_pos", "coulomb_friction_pos", coulomb_pos, 1.0, ">= 0"),
+            ("coulomb_neg", "coulomb_friction_neg", coulomb_neg, -1.0, "<= 0"),
+        )
+        for name, field, value, sign, expect in checks:
+            if value is None:
+                continue
+            v = _vector(value, self.n, name)
+            if np.any(sign * v < 0):
+                raise ValueError(f"{name}: expected values {expect}, got {v.tolist()}")
+            self._set(field, v)
+
+    def set_gravity(self, gravity: Any) -> None:
+        """Gravitational acceleration in the base frame, (3,) m/s^2."""
+        self._set("gravity", _vector(gravity, 3, "gravity"))
+
+    # ------------------------------------------------------------- symbolic
+    @cached_property
+    def functions(self) -> DynamicsFunctions:
+        """The named CasADi Functions (inputs ``q``, ``qd``, ``qdd``/``tau``, ``p``); built on first access."""
+        return build_functions(self.description, self.motor_model)
+
+    # -------------------------------------------------------------- compile
+    @property
+    def build_info(self) -> BuildInfo | None:
+        """What the last :meth:`compile` did (None before it ran)."""
+        return self._build_info
+
+    def compile(self, *, force: bool = False) -> BuildInfo:
+        """Build (or load from the cache) the compiled library of the numeric API.
+
+        Raises :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
+        """
+        with self._lock:
+            if self._library is not None and not force:
+                assert self._build_info is not None
+                return self._build_info
+            key = f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}|{source_fingerprint()}"
+            stem = f"{self.description.name}-{self.motor_model}"
+            funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
+            self._library, self._build_info = build_library(stem, key, funcs)
+            self._fallback = False
+            return self._build_info
+
+    def _backend(self) -> CompiledLibrary | None:
+        if self._library is None and not self._fallback:
+            try:
+                self.compile()
+            except CompilerNotFoundError as exc:
+                warnings.warn(f"{exc}; evaluating the dynamics with CasADi instead", NoCompilerWarning, stacklevel=3)
+                self._fallback = True
+        return self._library
+
+    def _eval(self, name: str, inputs: Sequence[np.ndarray], n_points: int) -> np.ndarray:
+        """(n_points, numel) first output of Function ``name``; rows are states, matrices column-major."""
+        lib = self._backend()
+        if lib is not None:
+            return lib.evaluate(name, inputs, n_points)[0]
+        f: ca.Function = getattr(self.functions, name)
+        cols = [a.T if a.ndim == 2 else a for a in inputs]
+        out = np.array(f.map(n_points)(*cols) if n_points > 1 else f(*cols))  # (rows, cols * n_points)
+        rows, cols_per_point = f.size1_out(0), f.size2_out(0)
+        return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
+
+    # --------------------------------------------------------------- numeric
+    def inertia(self, q: Any) -> np.ndarray:
+        """(n, n) joint-space inertia B(q) (motor inertia included)."""
+        n = self.n
+        return self._eval("inertia", [_vector(q, n, "q"), self._p], 1)[0].reshape(n, n, order="F")
+
+    def coriolis(self, q: Any, qd: Any) -> np.ndarray:
+        """(n, n) Coriolis/centrifugal matrix C(q, qd) (Christoffel symbols of the first kind)."""
+        n = self.n
+        out = self._eval("coriolis", [_vector(q, n, "q"), _vector(qd, n, "qd"), self._p], 1)
+        return out[0].reshape(n, n, order="F")
+
+    def gravload(self, q: Any) -> np.ndarray:
+        """(n,) gravity torque g(q) (payload included)."""
+        return self._eval("gravload", [_vector(q, self.n, "q"), self._p], 1)[0]
+
+    def friction(self, qd: Any) -> np.ndarray:
+        """(n,) friction torque F(qd) the joints must overcome (= -RTB ``Link.friction``)."""
+        return self._eval("friction", [_vector(qd, self.n, "qd"), self._p], 1)[0]
+
+    def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+        """(n,) joint torques ``B qdd + C qd + g + F`` (Newton-Euler)."""
+        n = self.n
+        return self._eval("rne", [_vector(q, n, "q"), _vector(qd, n, "qd"), _vector(qdd, n, "qdd"), self._p], 1)[0]
+
+    def accel(self, q: Any, qd: Any, tau: Any) -> np.ndarray:
+        """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)``."""
+        n = self.n
+        return self._eval("accel", [_vector(q, n, "q"), _vector(qd, n, "qd"), _vector(tau, n, "tau"), self._p], 1)[0]
+
+    def _batch3(self, name: str, A: Any, Bv: Any, Cv: Any, names: tuple[str, str, str]) -> np.ndarray:
+        n = self.n
+        arrays = [_batch(v, n, k) for v, k in zip((A, Bv, Cv), names)]
+        N = arrays[0].shape[0]
+        for arr, k in zip(arrays[1:], names[1:]):
+            if arr.shape[0] != N:
+                raise ValueError(f"{k}: expected {N} rows like {names[0]}, got shape {arr.shape}")
+        if N == 0:
+            return np.empty((0, n))
+        return self._eval(name, [*arrays, self._p], N)
+
+    def rne_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
+        """(N, n) inverse dynamics of N states given as (N, n) arrays, one compiled call."""
+        return self._batch3("rne", Q, QD, QDD, ("Q", "QD", "QDD"))
+
+    def accel_batch(self, Q: Any, QD: Any, TAU: Any) -> np.ndarray:
+        """(N, n) forward dynamics of N states given as (N, n) arrays, one compiled call."""
+        return self._batch3("accel", Q, QD, TAU, ("Q", "QD", "TAU"))

@@ -1,0 +1,106 @@
+"""Motor and gearbox terms: friction, and the rotor's share of the kinetic and potential energy.
+
+Two motor models (``MOTOR_MODELS``):
+
+``"reflected"``
+    The Robotics Toolbox convention: rotor i only adds ``G_i^2 Jm_i`` to the
+    diagonal of B(q); its mass is assumed lumped into the link data.
+``"full"``
+    Rotor i is a body carried by link i-1 (the base for i = 1), centred on
+    joint axis i at the origin of frame i-1, mass ``rotor_mass_i``, inertia
+    ``Jm_i`` about its spin axis and no transverse inertia. Its angular
+    velocity is ``w_{i-1} + G_i qd_i z_{i-1}``, which gives the off-diagonal
+    ``G_i Jm_i z_{i-1}^T J_w,i-1`` terms of B(q).
+
+Friction (both models) is motor-side data reflected to the joint:
+``F_i(qd) = G_i^2 B_i qd_i + |G_i| Tc_i(sign qd_i)`` with ``Tc+`` for
+``qd > 0``, ``Tc-`` for ``qd < 0`` and 0 at ``qd = 0``; F is the torque the
+joint must supply to overcome friction (positive with ``qd``).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import casadi as ca
+import numpy as np
+
+from ..description import RobotDescription
+
+__all__ = ["MOTOR_MODELS", "check_motor_model", "friction_sx", "rotor_energy_terms"]
+
+MOTOR_MODELS: tuple[str, ...] = ("reflected", "full")
+
+
+def check_motor_model(motor_model: str) -> str:
+    """Return ``motor_model`` if it is one of :data:`MOTOR_MODELS`; ValueError naming it otherwise."""
+    if motor_model not in MOTOR_MODELS:
+        raise ValueError(f"motor_model: expected one of {MOTOR_MODELS}, got {motor_model!r}")
+    return motor_model
+
+
+def friction_sx(gear_ratio: np.ndarray, qd: Any, viscous: Any, coulomb_pos: Any, coulomb_neg: Any) -> ca.SX:
+    """(n, 1) joint friction torque F(qd), N m or N.
+
+    Parameters
+    ----------
+    gear_ratio
+        (n,) reduction ratios G (motor angle = G q).
+    qd
+        (n, 1) joint velocities, rad/s or m/s.
+    viscous, coulomb_pos, coulomb_neg
+        (n, 1) motor-side viscous (N m s/rad) and Coulomb (N m) coefficients.
+    """
+    terms = []
+    for i, g in enumerate(np.asarray(gear_ratio, dtype=float)):
+        coulomb = ca.if_else(qd[i] > 0, coulomb_pos[i], ca.if_else(qd[i] < 0, coulomb_neg[i], 0))
+        terms.append(g * g * viscous[i] * qd[i] + abs(g) * coulomb)
+    return ca.vertcat(*terms)
+
+
+def rotor_energy_terms(
+    desc: RobotDescription,
+    motor_model: str,
+    frames: Sequence[ca.SX],
+    J_v: Sequence[ca.SX],
+    J_w: Sequence[ca.SX],
+    gravity: Any,
+) -> tuple[ca.SX, ca.SX]:
+    """Rotor contributions ``(B_m, U_m)`` to the inertia matrix and the potential energy.
+
+    Parameters
+    ----------
+    frames
+        ``[T_00, ..., T_0n]`` link frames in the base frame.
+    J_v, J_w
+        For k = 0..n, the (3, n) linear Jacobian of the origin of frame k and
+        the (3, n) angular Jacobian of link k (k = 0: the base, zeros), base axes.
+    gravity
+        (3, 1) gravitational acceleration in the base frame, m/s^2.
+
+    Returns
+    -------
+    B_m
+        (n, n) rotor inertia matrix contribution, kg m^2.
+    U_m
+        Rotor potential energy, J (zero in the reflected model).
+    """
+    n = desc.n
+    G = np.array([lk.gear_ratio for lk in desc.links])
+    Jm = np.array([lk.motor_inertia for lk in desc.links])
+    if motor_model == "reflected":
+        return ca.SX(ca.DM(np.diag(G * G * Jm))), ca.SX(0)
+    B_m = ca.SX.zeros(n, n)
+    U_m = ca.SX(0)
+    for i, link in enumerate(desc.links):  # rotor i+1 (1-based) sits on frame i (0-based list index)
+        z_0k = frames[i][0:3, 2]
+        p_0k = frames[i][0:3, 3]
+        spin_row = z_0k.T @ J_w[i]  # (1, n): z_{i} . w_{i} per joint rate
+        e_i = ca.DM.zeros(1, n)
+        e_i[i] = G[i]
+        a_row = spin_row + e_i  # rotor spin rate about its axis, per joint rate
+        B_m += Jm[i] * (a_row.T @ a_row)
+        if link.rotor_mass:
+            B_m += link.rotor_mass * (J_v[i].T @ J_v[i])
+            U_m -= link.rotor_mass * (gravity.T @ p_0k)
+    return B_m, U_m

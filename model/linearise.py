@@ -1,0 +1,101 @@
+"""Linearise the plant about an operating point into a ``control.StateSpace``.
+
+States ``x = [q; qd]``, inputs the motor torques ``u`` (joint torque ``G u``),
+outputs chosen by the caller. A and B are exact symbolic Jacobians of
+``xdot = [qd; accel(q, qd, G u, p)]`` evaluated at ``(q0, qd0, u0)`` and the
+current parameters of ``robot.dynamics``.
+
+Coulomb friction ``|G| Tc(sign qd)`` is piecewise constant in ``qd``: its
+derivative is 0 wherever ``qd_i != 0``, and the Jacobian returns 0 at
+``qd_i = 0`` too, where the friction is discontinuous (a dead zone of width
+``2 |G| Tc`` that no linear model represents). Viscous friction enters A.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import casadi as ca
+import control
+import numpy as np
+
+from .plant import build_plant
+from .robot import Robot, as_joint_vector
+
+__all__ = ["linearise", "OUTPUT_KINDS"]
+
+#: Output groups accepted by :func:`linearise`.
+OUTPUT_KINDS: tuple[str, ...] = ("q", "qd", "qm")
+
+
+def _output_matrix(robot: Robot, outputs: str | Sequence[str] | Any) -> tuple[np.ndarray, list[str]]:
+    n = robot.n
+    G = robot.gear_ratio
+    if isinstance(outputs, str):
+        outputs = [outputs]
+    if isinstance(outputs, (list, tuple)) and all(isinstance(o, str) for o in outputs):
+        blocks, names = [], []
+        for kind in outputs:
+            zero = np.zeros((n, n))
+            if kind == "q":
+                blocks.append(np.hstack([np.eye(n), zero]))
+            elif kind == "qd":
+                blocks.append(np.hstack([zero, np.eye(n)]))
+            elif kind == "qm":
+                blocks.append(np.hstack([np.diag(G), zero]))
+            else:
+                raise ValueError(f"outputs: expected kinds from {OUTPUT_KINDS} or a (ny, {2 * n}) matrix, got {kind!r}")
+            names += [f"{kind}[{i}]" for i in range(1, n + 1)]
+        if not blocks:
+            raise ValueError("outputs: expected at least one output kind, got an empty list")
+        return np.vstack(blocks), names
+    C = np.atleast_2d(np.asarray(outputs, dtype=float))
+    if C.ndim != 2 or C.shape[1] != 2 * n:
+        raise ValueError(f"outputs: expected a (ny, {2 * n}) output matrix, got shape {np.shape(outputs)}")
+    return C, [f"y[{i}]" for i in range(1, C.shape[0] + 1)]
+
+
+def linearise(robot: Robot, q0: Any, qd0: Any = None, u0: Any = None, outputs: str | Sequence[str] | Any = "q") -> control.StateSpace:
+    """Linear model ``dx = A dx + B du``, ``dy = C dx`` of ``robot`` about ``(q0, qd0, u0)``.
+
+    Parameters
+    ----------
+    robot
+        The robot (its motor model and ``robot.dynamics`` parameters are used).
+    q0
+        (n,) joint positions, rad / m.
+    qd0
+        (n,) joint velocities, rad/s / m/s; zeros by default.
+    u0
+        (n,) motor torques, N m; by default those giving zero acceleration at
+        ``(q0, qd0)``: ``u0 = rne(q0, qd0, 0) / G``.
+    outputs
+        A kind from :data:`OUTPUT_KINDS` (``"q"``, ``"qd"``, ``"qm"`` = ``G q``), a
+        list of kinds (stacked in order), or an explicit (ny, 2n) matrix C.
+
+    Returns
+    -------
+    control.StateSpace
+        Named states ``q[i]``, ``qd[i]``, inputs ``u[i]`` and outputs; D = 0.
+    """
+    n = robot.n
+    q0v = as_joint_vector(q0, n, "q0")
+    qd0v = np.zeros(n) if qd0 is None else as_joint_vector(qd0, n, "qd0")
+    G = robot.gear_ratio
+    u0v = robot.dynamics.rne(q0v, qd0v, np.zeros(n)) / G if u0 is None else as_joint_vector(u0, n, "u0")
+    C, out_names = _output_matrix(robot, outputs)
+
+    plant = build_plant(robot)
+    x = ca.SX.sym("x", 2 * n)
+    u = ca.SX.sym("u", n)
+    p = ca.SX.sym("p", len(plant.param_names))
+    xdot = plant.ode(x, u, p)
+    jac = ca.Function("linearisation", [x, u, p], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
+                      ["x", "u", "p"], ["A", "B"])
+    A, B = (np.array(m) for m in jac(np.concatenate([q0v, qd0v]), u0v, robot.dynamics.p))
+    D = np.zeros((C.shape[0], n))
+    return control.ss(
+        A, B, C, D,
+        states=list(plant.state_names), inputs=list(plant.input_names), outputs=out_names,
+        name=f"{robot.name}_linear",
+    )
