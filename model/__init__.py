@@ -8,6 +8,7 @@ from .description import (
     RobotDescriptionError,
     load_description,
 )
+from .dynamics import Dynamics
 from .clik import CLIKResult, clik, seed_clik_task
 from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
 from .robot import Robot, load_robot
@@ -17,6 +18,7 @@ from .trajectory import JointPath, Trajectory, ctraj, jtraj, straight_line, trap
 
 __all__ = [
     "CLIKResult",
+    "Dynamics",
     "IKResult",
     "IKSolution",
     "NoClosedFormError",

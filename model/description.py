@@ -83,6 +83,8 @@ class LinkDescription:
     # (the base for i = 1), spins about its joint axis, mass rotor_mass (kg) at the
     # joint-i origin. Its inertia about the spin axis is motor_inertia.
     rotor_mass: float = 0.0
+    # Continuous torque rating of the motor (N m, motor side); None when the file states none.
+    torque_limit: float | None = None
 
     @property
     def is_revolute(self) -> bool:
@@ -134,7 +136,7 @@ class RobotDescription:
         payload = {
             "gravity": self.gravity,
             "links": [
-                {k: v for k, v in dataclasses.asdict(lk).items() if k not in ("name", "qlim")}
+                {k: v for k, v in dataclasses.asdict(lk).items() if k not in ("name", "qlim", "torque_limit")}
                 for lk in self.links
             ],
         }
@@ -149,7 +151,7 @@ _TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks")
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
     "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
-    "coulomb_friction", "qlim", "name", "rotor_mass", "source",
+    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source",
 )
 
 
@@ -248,6 +250,11 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription:
             raise w.fail(i, "name", data["name"], "a string")
         kw["name"] = data["name"]
     kw["rotor_mass"] = _number(w, i, "rotor_mass", data.get("rotor_mass", 0.0), nonneg=True)
+    if "torque_limit" in data:
+        limit = _number(w, i, "torque_limit", data["torque_limit"])
+        if limit <= 0:
+            raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
+        kw["torque_limit"] = limit
     return LinkDescription(**kw)
 
 

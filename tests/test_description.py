@@ -194,3 +194,10 @@ def test_extra_metadata_is_read_only():
     desc = load_description("scara")
     with pytest.raises(TypeError):
         desc.extra["units"] = {}  # type: ignore[index]
+
+
+def test_torque_limit_must_be_positive(tmp_path):
+    path = _write(tmp_path, _toml({"torque_limit": "0.0"}))
+    message = f"{path}, link 2: field 'torque_limit' = 0.0: expected a motor torque rating > 0 (N m)"
+    with pytest.raises(RobotDescriptionError, match=re.escape(message)):
+        load_description(path)

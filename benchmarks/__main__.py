@@ -1,0 +1,23 @@
+"""Run every benchmark in this folder (``python -m benchmarks``), each comparing against a named peer."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import sys
+from pathlib import Path
+
+
+def main() -> int:
+    names = sorted(m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)]) if m.name.startswith("bench_"))
+    for name in names:
+        print(f"\n=== benchmarks.{name} ===", flush=True)
+        module = importlib.import_module(f"benchmarks.{name}")
+        status = module.main([]) if hasattr(module, "main") else 0
+        if status:
+            return int(status)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
