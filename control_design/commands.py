@@ -26,18 +26,20 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import matplotlib.pyplot as plt
+
 from model.robot import load_robot
 
 from .computed_torque import ModelMismatch, plant_with_mismatch
 from .decentralised import DEFAULT_BANDWIDTH
-from .design import CONTROLLER_KINDS, DEFAULT_RATE_HZ, design_robot
+from .design import CONTROLLER_KINDS, DEFAULT_RATE_HZ, RobotDesign, design_robot
 from .errors import DesignSpecError, UnknownControllerError
 from .plots import bode_plot, joint_plot, step_plot, torque_plot, tracking_error_plot
 from .reference import check_trajectory_limits, task_trajectory
 from .responses import bode_response, step_response
-from .simulate import ProgressLine, simulate_tracking
+from .simulate import ProgressLine, TrackingResult, simulate_tracking
 
-__all__ = ["register", "run_design", "run_track"]
+__all__ = ["register", "run_design", "run_track", "save_design_plots", "save_tracking_plots"]
 
 _KINDS_TEXT = "{" + ",".join(CONTROLLER_KINDS) + "}"
 
@@ -82,6 +84,32 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
     path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n")
 
 
+def save_design_plots(design: RobotDesign, out: Path, prefix: str = "") -> list[Path]:
+    """Write ``{prefix}bode_<joint>.png`` and ``{prefix}step_<joint>.png`` (continuous and sampled loop) per joint."""
+    assert design.reports is not None
+    paths = []
+    for loop, rep in zip(design.loops, design.reports):
+        name = rep.name.replace("/", "_")
+        title = f"{design.robot.name} {name}: {design.kind}, {design.bandwidth:g} rad/s"
+        for kind, fig in (("bode", bode_plot([bode_response(loop), bode_response(loop, discrete=True)], title)),
+                          ("step", step_plot([step_response(loop), step_response(loop, discrete=True)], title))):
+            paths.append(out / f"{prefix}{kind}_{name}.png")
+            fig.savefig(paths[-1], dpi=110)
+            plt.close(fig)
+    return paths
+
+
+def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "") -> list[Path]:
+    """Write ``{prefix}tracking_error.png``, ``{prefix}torques.png`` and ``{prefix}joints.png``."""
+    paths = []
+    for name, plot in (("tracking_error", tracking_error_plot), ("torques", torque_plot), ("joints", joint_plot)):
+        fig = plot(result)
+        paths.append(out / f"{prefix}{name}.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    return paths
+
+
 def run_design(args: argparse.Namespace) -> int:
     """``manip design``: design, analyse, write design.json and the Bode / step PNGs."""
     kind = _controller(args.controller)
@@ -94,16 +122,11 @@ def run_design(args: argparse.Namespace) -> int:
     print(f"{robot.name}: {kind} at {args.bandwidth:g} rad/s, {args.rate:g} Hz "
           f"({'computed-torque outer loops, 1/s^2 and 1/s' if kind == 'ct' else 'motor-side gains, N m/rad and N m s/rad'})")
     print(f"{'joint':<10} {'Kp':>11} {'Kd':>11} {'w_c':>8} {'PM':>6} {'PM_d':>6} {'GM_d dB':>8} {'w_bw':>7} {'OS %':>6} {'t_s':>7}")
-    for loop, rep in zip(design.loops, design.reports):
-        name = rep.name.replace("/", "_")
-        title = f"{robot.name} {name}: {kind}, {args.bandwidth:g} rad/s"
-        fig = bode_plot([bode_response(loop), bode_response(loop, discrete=True)], title)
-        fig.savefig(out / f"bode_{name}.png", dpi=110)
-        fig = step_plot([step_response(loop), step_response(loop, discrete=True)], title)
-        fig.savefig(out / f"step_{name}.png", dpi=110)
+    for rep in design.reports:
         gm_db = 20 * math.log10(rep.gain_margin_d) if math.isfinite(rep.gain_margin_d) else math.inf
         print(f"{rep.name:<10} {rep.Kp_m:>11.4g} {rep.Kd_m:>11.4g} {rep.crossover:>8.2f} {rep.phase_margin:>6.1f} "
               f"{rep.phase_margin_d:>6.1f} {gm_db:>8.1f} {rep.bandwidth:>7.2f} {rep.overshoot:>6.1f} {rep.settling_time:>7.4f}")
+    save_design_plots(design, out)
     print(f"wrote {out / 'design.json'} and {2 * robot.n} PNG files")
     return 0
 
@@ -142,9 +165,7 @@ def run_track(args: argparse.Namespace) -> int:
                                "peak_motor_torque": nominal.peak_motor_torque.tolist()}
         data["max_error_ratio"] = [float(a / b) if b > 0 else None for a, b in zip(met.max_error, nominal.max_error)]
     _write_json(out / "metrics.json", data)
-    tracking_error_plot(result).savefig(out / "tracking_error.png", dpi=110)
-    torque_plot(result).savefig(out / "torques.png", dpi=110)
-    joint_plot(result).savefig(out / "joints.png", dpi=110)
+    save_tracking_plots(result, out)
     print(f"{robot.name}: {kind} at {args.rate:g} Hz, {mismatch.describe()}, {result.t[-1] - result.t[0]:g} s "
           f"simulated in {met.wall_time:.2f} s")
     print(f"{'joint':<10} {'unit':<4} {'RMS error':>11} {'max error':>11} {'peak tau_m':>11} {'peak qd_m':>10}")

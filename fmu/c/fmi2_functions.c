@@ -1,0 +1,729 @@
+/*
+ * The FMI 2.0 API for Model Exchange and Co-Simulation, written once for every
+ * exported model. This file owns the state machine (which call is legal in
+ * which mode), the argument checks and the status handling; the model itself
+ * is reached only through the contract of model.h.
+ *
+ * Status policy: a call that returns fmi2Error logs why and puts the instance
+ * in its error mode (from which fmi2SetFMUstate, fmi2Reset, fmi2FreeInstance
+ * and the getters remain legal); a rejected call changes no value. fmi2Discard
+ * (a co-simulation step whose state became non-finite, derivatives that are
+ * not finite, a status that is not available) keeps the last good state.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "instance.h"
+
+/* ------------------------------------------------------- legal modes per call */
+
+#define ALL_MODES (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS | \
+                   MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED | MW_MODE_TERMINATED | MW_MODE_ERROR)
+#define AFTER_INIT_MODES (MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS | MW_MODE_STEP_COMPLETE | \
+                          MW_MODE_STEP_FAILED | MW_MODE_TERMINATED | MW_MODE_ERROR)
+
+#define MODES_SetDebugLogging ALL_MODES
+#define MODES_SetupExperiment MW_MODE_INSTANTIATED
+#define MODES_EnterInitializationMode MW_MODE_INSTANTIATED
+#define MODES_ExitInitializationMode MW_MODE_INIT
+#define MODES_Terminate (MW_MODE_EVENT | MW_MODE_CONTINUOUS | MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED)
+#define MODES_Reset ALL_MODES
+#define MODES_GetValue AFTER_INIT_MODES
+#define MODES_SetReal (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS | MW_MODE_STEP_COMPLETE)
+#define MODES_SetOther (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_STEP_COMPLETE)
+#define MODES_FMUstate ALL_MODES
+#define MODES_GetDirectionalDerivative AFTER_INIT_MODES
+/* Model Exchange */
+#define MODES_EnterEventMode (MW_MODE_EVENT | MW_MODE_CONTINUOUS)
+#define MODES_NewDiscreteStates MW_MODE_EVENT
+#define MODES_EnterContinuousTimeMode MW_MODE_EVENT
+#define MODES_CompletedIntegratorStep MW_MODE_CONTINUOUS
+#define MODES_SetTime (MW_MODE_EVENT | MW_MODE_CONTINUOUS)
+#define MODES_SetContinuousStates MW_MODE_CONTINUOUS
+#define MODES_GetDerivatives (MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS | MW_MODE_TERMINATED | MW_MODE_ERROR)
+#define MODES_GetEventIndicators MODES_GetDerivatives
+#define MODES_GetContinuousStates MODES_GetDerivatives
+#define MODES_GetNominalsOfContinuousStates (MW_MODE_INSTANTIATED | MODES_GetDerivatives)
+/* Co-Simulation */
+#define MODES_SetRealInputDerivatives (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_STEP_COMPLETE)
+#define MODES_GetRealOutputDerivatives (MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED | MW_MODE_TERMINATED | MW_MODE_ERROR)
+#define MODES_DoStep MW_MODE_STEP_COMPLETE
+#define MODES_CancelStep MW_MODE_STEP_COMPLETE
+#define MODES_GetStatus (MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED | MW_MODE_TERMINATED)
+
+enum { FOR_ANY = 0, FOR_ME = 1, FOR_CS = 2 };
+
+static const char *mode_name(unsigned int mode) {
+    switch (mode) {
+    case MW_MODE_INSTANTIATED: return "instantiated";
+    case MW_MODE_INIT: return "initialization mode";
+    case MW_MODE_EVENT: return "event mode";
+    case MW_MODE_CONTINUOUS: return "continuous-time mode";
+    case MW_MODE_STEP_COMPLETE: return "step complete";
+    case MW_MODE_STEP_FAILED: return "step failed";
+    case MW_MODE_TERMINATED: return "terminated";
+    case MW_MODE_ERROR: return "error";
+    default: return "unknown";
+    }
+}
+
+/* Log an error, enter the error mode, return fmi2Error. */
+static fmi2Status fail(MwInstance *inst, const char *fn, const char *what) {
+    mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: %s", fn, what);
+    inst->mode = MW_MODE_ERROR;
+    return fmi2Error;
+}
+
+/* The instance behind c if c is one of ours, else NULL. */
+static MwInstance *as_instance(fmi2Component c) {
+    MwInstance *inst = (MwInstance *)c;
+    if (inst == NULL || inst->magic != MW_INSTANCE_MAGIC) return NULL;
+    return inst;
+}
+
+/* The instance if the call is legal for its interface type and mode; else logs, returns NULL. */
+static MwInstance *enter(fmi2Component c, const char *fn, int interface_type, unsigned int modes) {
+    MwInstance *inst = as_instance(c);
+    if (inst == NULL) return NULL;
+    mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s", fn);
+    if (interface_type == FOR_ME && inst->type != fmi2ModelExchange) {
+        fail(inst, fn, "this function belongs to Model Exchange, the instance is Co-Simulation");
+        return NULL;
+    }
+    if (interface_type == FOR_CS && inst->type != fmi2CoSimulation) {
+        fail(inst, fn, "this function belongs to Co-Simulation, the instance is Model Exchange");
+        return NULL;
+    }
+    if ((inst->mode & modes) == 0) {
+        mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in mode \"%s\"", fn,
+               mode_name(inst->mode));
+        inst->mode = MW_MODE_ERROR;
+        return NULL;
+    }
+    return inst;
+}
+
+#define ENTER(fn, type, modes)                                 \
+    MwInstance *inst = enter(c, "fmi2" #fn, type, modes);      \
+    if (inst == NULL) return fmi2Error
+
+static int null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr) {
+    if (ptr != NULL) return 0;
+    mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
+    inst->mode = MW_MODE_ERROR;
+    return 1;
+}
+
+static fmi2Status no_variables_of_type(MwInstance *inst, const char *fn, const char *type_name,
+                                       const fmi2ValueReference vr[], size_t nvr, const void *values) {
+    char what[160];
+    if (nvr == 0) return fmi2OK;
+    if (null_arg(inst, fn, "vr[]", vr) || null_arg(inst, fn, "value[]", values)) return fmi2Error;
+    snprintf(what, sizeof(what), "unknown value reference %u: the model has no %s variables", vr[0], type_name);
+    return fail(inst, fn, what);
+}
+
+/* --------------------------------------------------------- common functions */
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    ENTER(SetDebugLogging, FOR_ANY, MODES_SetDebugLogging);
+    if (nCategories > 0 && null_arg(inst, "fmi2SetDebugLogging", "categories[]", categories)) return fmi2Error;
+    return mw_set_logging(inst, loggingOn, nCategories, categories);
+}
+
+static void log_before_instance(const fmi2CallbackFunctions *functions, fmi2String name, const char *message) {
+    functions->logger(functions->componentEnvironment, name != NULL ? name : "", fmi2Error, "logStatusError",
+                      message);
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    const MwModel *model = mw_model();
+    MwInstance *inst;
+    (void)fmuResourceLocation; /* the model needs no resources */
+    (void)visible;
+
+    if (functions == NULL || functions->logger == NULL) return NULL; /* nowhere to report */
+    if (functions->allocateMemory == NULL || functions->freeMemory == NULL) {
+        log_before_instance(functions, instanceName, "fmi2Instantiate: allocateMemory and freeMemory are required");
+        return NULL;
+    }
+    if (instanceName == NULL || instanceName[0] == '\0') {
+        log_before_instance(functions, instanceName, "fmi2Instantiate: instanceName is NULL or empty");
+        return NULL;
+    }
+    if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation) {
+        log_before_instance(functions, instanceName, "fmi2Instantiate: fmuType is neither fmi2ModelExchange nor fmi2CoSimulation");
+        return NULL;
+    }
+    if (fmuGUID == NULL || strcmp(fmuGUID, model->guid) != 0) {
+        log_before_instance(functions, instanceName,
+                            "fmi2Instantiate: wrong GUID: it does not match the modelDescription.xml of this binary");
+        return NULL;
+    }
+    inst = mw_instance_new(model, fmuType, instanceName, functions, loggingOn);
+    if (inst == NULL) {
+        log_before_instance(functions, instanceName, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    return (fmi2Component)inst;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    MwInstance *inst = as_instance(c);
+    if (inst == NULL) return;
+    mw_log(inst, fmi2OK, MW_LOG_CALLS, "fmi2FreeInstance");
+    mw_instance_free(inst);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    ENTER(SetupExperiment, FOR_ANY, MODES_SetupExperiment);
+    (void)toleranceDefined; /* the integrator is fixed-step; the tolerance is the importer's */
+    (void)tolerance;
+    if (!isfinite(startTime)) return fail(inst, "fmi2SetupExperiment", "startTime is not finite");
+    if (stopTimeDefined && !(stopTime >= startTime))
+        return fail(inst, "fmi2SetupExperiment", "stopTime is before startTime or not a number");
+    inst->time = startTime;
+    inst->last_successful_time = startTime;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    ENTER(EnterInitializationMode, FOR_ANY, MODES_EnterInitializationMode);
+    inst->mode = MW_MODE_INIT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
+    mw_invalidate(inst);
+    if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
+        return fail(inst, "fmi2ExitInitializationMode", "the initial state and parameters give non-finite derivatives");
+    inst->mode = inst->type == fmi2ModelExchange ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    ENTER(Terminate, FOR_ANY, MODES_Terminate);
+    inst->mode = MW_MODE_TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    ENTER(Reset, FOR_ANY, MODES_Reset);
+    mw_set_start_values(inst);
+    inst->mode = MW_MODE_INSTANTIATED;
+    return fmi2OK;
+}
+
+/* ------------------------------------------------------------ get and set */
+
+/* The variable behind vr, or NULL after logging the error. */
+static const MwVariable *lookup(MwInstance *inst, const char *fn, fmi2ValueReference vr) {
+    char what[96];
+    if ((size_t)vr < inst->model->nvars) return &inst->model->variables[vr];
+    snprintf(what, sizeof(what), "unknown value reference %u (Real variables are 0..%u)", vr,
+             (unsigned int)(inst->model->nvars - 1));
+    fail(inst, fn, what);
+    return NULL;
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    size_t i;
+    int need_xdot = 0, need_y = 0;
+    ENTER(GetReal, FOR_ANY, MODES_GetValue);
+    if (nvr == 0) return fmi2OK;
+    if (null_arg(inst, "fmi2GetReal", "vr[]", vr) || null_arg(inst, "fmi2GetReal", "value[]", value)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        const MwVariable *v = lookup(inst, "fmi2GetReal", vr[i]);
+        if (v == NULL) return fmi2Error;
+        need_xdot |= v->kind == MW_KIND_DERIVATIVE;
+        need_y |= v->kind == MW_KIND_OUTPUT;
+    }
+    if (need_xdot && mw_update_derivatives(inst) != 0)
+        return fail(inst, "fmi2GetReal", "the model failed to evaluate the derivatives");
+    if (need_y && mw_update_outputs(inst) != 0)
+        return fail(inst, "fmi2GetReal", "the model failed to evaluate the outputs");
+    for (i = 0; i < nvr; i++) {
+        const MwVariable *v = &inst->model->variables[vr[i]];
+        switch ((MwKind)v->kind) {
+        case MW_KIND_STATE: value[i] = inst->x[v->index]; break;
+        case MW_KIND_DERIVATIVE: value[i] = inst->xdot[v->index]; break;
+        case MW_KIND_INPUT: value[i] = inst->u[v->index]; break;
+        case MW_KIND_PARAMETER: value[i] = inst->p[v->index]; break;
+        case MW_KIND_OUTPUT: value[i] = inst->y[v->index]; break;
+        case MW_KIND_STEP: value[i] = inst->h_int; break;
+        default: return fail(inst, "fmi2GetReal", "corrupt variable table");
+        }
+    }
+    return fmi2OK;
+}
+
+/* Whether variable v may be set in the instance's current mode; logs why not. */
+static int settable_now(MwInstance *inst, const MwVariable *v) {
+    const char *why = NULL;
+    unsigned int mode = inst->mode;
+    char what[256];
+    switch ((MwSettable)v->settable) {
+    case MW_SET_NEVER:
+        why = "is calculated by the model and cannot be set";
+        break;
+    case MW_SET_INITIAL:
+        if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT)))
+            why = "is fixed: it can only be set before fmi2ExitInitializationMode";
+        break;
+    case MW_SET_TUNABLE:
+        if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_STEP_COMPLETE)))
+            why = "is a tunable parameter: it can be set in event mode (Model Exchange) or between steps (Co-Simulation)";
+        break;
+    case MW_SET_INPUT:
+        break;
+    default:
+        why = "has a corrupt table entry";
+        break;
+    }
+    if (why == NULL) return 1;
+    snprintf(what, sizeof(what), "variable %.60s %s (mode \"%s\")", v->name, why, mode_name(mode));
+    fail(inst, "fmi2SetReal", what);
+    return 0;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+    size_t i;
+    char what[256];
+    ENTER(SetReal, FOR_ANY, MODES_SetReal);
+    if (nvr == 0) return fmi2OK;
+    if (null_arg(inst, "fmi2SetReal", "vr[]", vr) || null_arg(inst, "fmi2SetReal", "value[]", value)) return fmi2Error;
+    /* check every value first: a rejected call changes nothing */
+    for (i = 0; i < nvr; i++) {
+        const MwVariable *v = lookup(inst, "fmi2SetReal", vr[i]);
+        if (v == NULL || !settable_now(inst, v)) return fmi2Error;
+        if (!isfinite(value[i])) {
+            snprintf(what, sizeof(what), "variable %.60s: value %g is not finite", v->name, value[i]);
+            return fail(inst, "fmi2SetReal", what);
+        }
+        if (value[i] < v->min || value[i] > v->max) {
+            snprintf(what, sizeof(what), "variable %.60s: value %.17g is outside [%g, %g]", v->name, value[i], v->min,
+                     v->max);
+            return fail(inst, "fmi2SetReal", what);
+        }
+    }
+    for (i = 0; i < nvr; i++) {
+        const MwVariable *v = &inst->model->variables[vr[i]];
+        switch ((MwKind)v->kind) {
+        case MW_KIND_STATE: inst->x[v->index] = value[i]; break;
+        case MW_KIND_INPUT: inst->u[v->index] = value[i]; break;
+        case MW_KIND_PARAMETER: inst->p[v->index] = value[i]; break;
+        case MW_KIND_STEP: inst->h_int = value[i]; break;
+        default: return fail(inst, "fmi2SetReal", "corrupt variable table");
+        }
+    }
+    mw_invalidate(inst);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
+    ENTER(GetInteger, FOR_ANY, MODES_GetValue);
+    return no_variables_of_type(inst, "fmi2GetInteger", "Integer", vr, nvr, value);
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
+    ENTER(GetBoolean, FOR_ANY, MODES_GetValue);
+    return no_variables_of_type(inst, "fmi2GetBoolean", "Boolean", vr, nvr, value);
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+    ENTER(GetString, FOR_ANY, MODES_GetValue);
+    return no_variables_of_type(inst, "fmi2GetString", "String", vr, nvr, value);
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
+    ENTER(SetInteger, FOR_ANY, MODES_SetOther);
+    return no_variables_of_type(inst, "fmi2SetInteger", "Integer", vr, nvr, value);
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
+    ENTER(SetBoolean, FOR_ANY, MODES_SetOther);
+    return no_variables_of_type(inst, "fmi2SetBoolean", "Boolean", vr, nvr, value);
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
+    ENTER(SetString, FOR_ANY, MODES_SetOther);
+    return no_variables_of_type(inst, "fmi2SetString", "String", vr, nvr, value);
+}
+
+/* ---------------------------------------------------------------- FMU state */
+
+static MwSnapshot *as_snapshot(const MwInstance *inst, fmi2FMUstate s) {
+    MwSnapshot *snap = (MwSnapshot *)s;
+    if (snap == NULL || snap->magic != MW_SNAPSHOT_MAGIC || snap->model != inst->model) return NULL;
+    return snap;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    MwSnapshot *snap;
+    ENTER(GetFMUstate, FOR_ANY, MODES_FMUstate);
+    if (null_arg(inst, "fmi2GetFMUstate", "FMUstate", FMUstate)) return fmi2Error;
+    if (*FMUstate == NULL) {
+        snap = mw_snapshot_new(inst);
+        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "out of memory");
+        *FMUstate = (fmi2FMUstate)snap;
+    } else {
+        snap = as_snapshot(inst, *FMUstate);
+        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "*FMUstate is not an FMU state of this model");
+    }
+    mw_snapshot_take(inst, snap);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    const MwSnapshot *snap;
+    ENTER(SetFMUstate, FOR_ANY, MODES_FMUstate);
+    snap = as_snapshot(inst, FMUstate);
+    if (snap == NULL) return fail(inst, "fmi2SetFMUstate", "FMUstate is NULL or not an FMU state of this model");
+    if (!mw_mode_valid(inst, snap->mode))
+        return fail(inst, "fmi2SetFMUstate", "the FMU state was taken by an instance of the other interface type");
+    mw_snapshot_restore(inst, snap);
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    MwSnapshot *snap;
+    ENTER(FreeFMUstate, FOR_ANY, MODES_FMUstate);
+    if (null_arg(inst, "fmi2FreeFMUstate", "FMUstate", FMUstate)) return fmi2Error;
+    if (*FMUstate == NULL) return fmi2OK;
+    snap = as_snapshot(inst, *FMUstate);
+    if (snap == NULL) return fail(inst, "fmi2FreeFMUstate", "*FMUstate is not an FMU state of this model");
+    snap->magic = 0;
+    inst->cb.freeMemory(snap);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    ENTER(SerializedFMUstateSize, FOR_ANY, MODES_FMUstate);
+    if (null_arg(inst, "fmi2SerializedFMUstateSize", "size", size)) return fmi2Error;
+    if (as_snapshot(inst, FMUstate) == NULL)
+        return fail(inst, "fmi2SerializedFMUstateSize", "FMUstate is NULL or not an FMU state of this model");
+    *size = mw_serialized_size(inst->model);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    const MwSnapshot *snap;
+    char what[128];
+    ENTER(SerializeFMUstate, FOR_ANY, MODES_FMUstate);
+    snap = as_snapshot(inst, FMUstate);
+    if (snap == NULL) return fail(inst, "fmi2SerializeFMUstate", "FMUstate is NULL or not an FMU state of this model");
+    if (null_arg(inst, "fmi2SerializeFMUstate", "serializedState[]", serializedState)) return fmi2Error;
+    if (size != mw_serialized_size(inst->model)) {
+        snprintf(what, sizeof(what), "size %lu differs from fmi2SerializedFMUstateSize, %lu bytes",
+                 (unsigned long)size, (unsigned long)mw_serialized_size(inst->model));
+        return fail(inst, "fmi2SerializeFMUstate", what);
+    }
+    mw_serialize(snap, serializedState);
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    MwSnapshot *snap;
+    const char *problem;
+    char what[192];
+    int created = 0;
+    ENTER(DeSerializeFMUstate, FOR_ANY, MODES_FMUstate);
+    if (null_arg(inst, "fmi2DeSerializeFMUstate", "serializedState[]", serializedState) ||
+        null_arg(inst, "fmi2DeSerializeFMUstate", "FMUstate", FMUstate))
+        return fmi2Error;
+    if (*FMUstate == NULL) {
+        snap = mw_snapshot_new(inst);
+        if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "out of memory");
+        created = 1;
+    } else {
+        snap = as_snapshot(inst, *FMUstate);
+        if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "*FMUstate is not an FMU state of this model");
+    }
+    problem = mw_deserialize(inst, serializedState, size, snap);
+    if (problem != NULL) {
+        if (created) inst->cb.freeMemory(snap);
+        snprintf(what, sizeof(what), "%lu bytes rejected: %s", (unsigned long)size, problem);
+        return fail(inst, "fmi2DeSerializeFMUstate", what);
+    }
+    *FMUstate = (fmi2FMUstate)snap;
+    return fmi2OK;
+}
+
+/* ----------------------------------------------------- directional derivatives */
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    const char *fn = "fmi2GetDirectionalDerivative";
+    const MwModel *m;
+    size_t i;
+    int need_dxdot = 0, need_dy = 0;
+    char what[192];
+    ENTER(GetDirectionalDerivative, FOR_ANY, MODES_GetDirectionalDerivative);
+    m = inst->model;
+    if (nUnknown == 0) return fmi2OK;
+    if (null_arg(inst, fn, "vUnknown_ref[]", vUnknown_ref) || null_arg(inst, fn, "dvUnknown[]", dvUnknown))
+        return fmi2Error;
+    if (nKnown > 0 && (null_arg(inst, fn, "vKnown_ref[]", vKnown_ref) || null_arg(inst, fn, "dvKnown[]", dvKnown)))
+        return fmi2Error;
+
+    if (m->nx > 0) memset(inst->dx, 0, m->nx * sizeof(double));
+    if (m->nu > 0) memset(inst->du, 0, m->nu * sizeof(double));
+    if (m->np > 0) memset(inst->dp, 0, m->np * sizeof(double));
+    for (i = 0; i < nKnown; i++) {
+        const MwVariable *v = lookup(inst, fn, vKnown_ref[i]);
+        if (v == NULL) return fmi2Error;
+        if (!isfinite(dvKnown[i])) {
+            snprintf(what, sizeof(what), "the seed of %.60s is not finite", v->name);
+            return fail(inst, fn, what);
+        }
+        switch ((MwKind)v->kind) {
+        case MW_KIND_STATE: inst->dx[v->index] += dvKnown[i]; break;
+        case MW_KIND_INPUT: inst->du[v->index] += dvKnown[i]; break;
+        case MW_KIND_PARAMETER: inst->dp[v->index] += dvKnown[i]; break;
+        default:
+            snprintf(what, sizeof(what), "%.60s cannot be a known: knowns are states, inputs and parameters", v->name);
+            return fail(inst, fn, what);
+        }
+    }
+    for (i = 0; i < nUnknown; i++) {
+        const MwVariable *v = lookup(inst, fn, vUnknown_ref[i]);
+        if (v == NULL) return fmi2Error;
+        if (v->kind == MW_KIND_DERIVATIVE) {
+            need_dxdot = 1;
+        } else if (v->kind == MW_KIND_OUTPUT) {
+            need_dy = 1;
+        } else if (v->kind != MW_KIND_STATE) {
+            snprintf(what, sizeof(what), "%.60s cannot be an unknown: unknowns are derivatives and outputs", v->name);
+            return fail(inst, fn, what);
+        }
+    }
+    if (mw_directional(inst, need_dxdot, need_dy) != 0) return fail(inst, fn, "the model failed to evaluate");
+    for (i = 0; i < nUnknown; i++) {
+        const MwVariable *v = &m->variables[vUnknown_ref[i]];
+        if (v->kind == MW_KIND_DERIVATIVE) {
+            dvUnknown[i] = inst->dxdot[v->index];
+        } else if (v->kind == MW_KIND_OUTPUT) {
+            dvUnknown[i] = inst->dy[v->index];
+        } else {
+            dvUnknown[i] = inst->dx[v->index];
+        }
+    }
+    return fmi2OK;
+}
+
+/* -------------------------------------------------------- Model Exchange */
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    ENTER(EnterEventMode, FOR_ME, MODES_EnterEventMode);
+    inst->mode = MW_MODE_EVENT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
+    ENTER(NewDiscreteStates, FOR_ME, MODES_NewDiscreteStates);
+    if (null_arg(inst, "fmi2NewDiscreteStates", "eventInfo", eventInfo)) return fmi2Error;
+    eventInfo->newDiscreteStatesNeeded = fmi2False;
+    eventInfo->terminateSimulation = fmi2False;
+    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    eventInfo->nextEventTimeDefined = fmi2False;
+    eventInfo->nextEventTime = 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    ENTER(EnterContinuousTimeMode, FOR_ME, MODES_EnterContinuousTimeMode);
+    inst->mode = MW_MODE_CONTINUOUS;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    ENTER(CompletedIntegratorStep, FOR_ME, MODES_CompletedIntegratorStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (null_arg(inst, "fmi2CompletedIntegratorStep", "enterEventMode", enterEventMode) ||
+        null_arg(inst, "fmi2CompletedIntegratorStep", "terminateSimulation", terminateSimulation))
+        return fmi2Error;
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    ENTER(SetTime, FOR_ME, MODES_SetTime);
+    if (!isfinite(time)) return fail(inst, "fmi2SetTime", "time is not finite");
+    inst->time = time;
+    return fmi2OK;
+}
+
+static int wrong_size(MwInstance *inst, const char *fn, const char *name, size_t got, size_t expected) {
+    char what[128];
+    if (got == expected) return 0;
+    snprintf(what, sizeof(what), "%s is %lu, the model has %lu", name, (unsigned long)got, (unsigned long)expected);
+    fail(inst, fn, what);
+    return 1;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    const char *fn = "fmi2SetContinuousStates";
+    ENTER(SetContinuousStates, FOR_ME, MODES_SetContinuousStates);
+    if (wrong_size(inst, fn, "nx", nx, inst->model->nx)) return fmi2Error;
+    if (nx == 0) return fmi2OK;
+    if (null_arg(inst, fn, "x[]", x)) return fmi2Error;
+    if (!mw_all_finite(x, nx)) return fail(inst, fn, "the states are not all finite");
+    memcpy(inst->x, x, nx * sizeof(double));
+    mw_invalidate(inst);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
+    const char *fn = "fmi2GetDerivatives";
+    ENTER(GetDerivatives, FOR_ME, MODES_GetDerivatives);
+    if (wrong_size(inst, fn, "nx", nx, inst->model->nx)) return fmi2Error;
+    if (nx == 0) return fmi2OK;
+    if (null_arg(inst, fn, "derivatives[]", derivatives)) return fmi2Error;
+    if (mw_update_derivatives(inst) != 0) return fail(inst, fn, "the model failed to evaluate the derivatives");
+    memcpy(derivatives, inst->xdot, nx * sizeof(double));
+    if (!mw_all_finite(inst->xdot, nx)) {
+        mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: the derivatives at t = %.17g are not finite", fn, inst->time);
+        return fmi2Discard;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    ENTER(GetEventIndicators, FOR_ME, MODES_GetEventIndicators);
+    (void)eventIndicators;
+    if (wrong_size(inst, "fmi2GetEventIndicators", "ni", ni, 0)) return fmi2Error;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    const char *fn = "fmi2GetContinuousStates";
+    ENTER(GetContinuousStates, FOR_ME, MODES_GetContinuousStates);
+    if (wrong_size(inst, fn, "nx", nx, inst->model->nx)) return fmi2Error;
+    if (nx == 0) return fmi2OK;
+    if (null_arg(inst, fn, "x[]", x)) return fmi2Error;
+    memcpy(x, inst->x, nx * sizeof(double));
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    const char *fn = "fmi2GetNominalsOfContinuousStates";
+    ENTER(GetNominalsOfContinuousStates, FOR_ME, MODES_GetNominalsOfContinuousStates);
+    if (wrong_size(inst, fn, "nx", nx, inst->model->nx)) return fmi2Error;
+    if (nx == 0) return fmi2OK;
+    if (null_arg(inst, fn, "x_nominal[]", x_nominal)) return fmi2Error;
+    memcpy(x_nominal, inst->model->x_nominal, nx * sizeof(double));
+    return fmi2OK;
+}
+
+/* --------------------------------------------------------- Co-Simulation */
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    ENTER(SetRealInputDerivatives, FOR_CS, MODES_SetRealInputDerivatives);
+    (void)vr;
+    (void)order;
+    (void)value;
+    if (nvr == 0) return fmi2OK;
+    return fail(inst, "fmi2SetRealInputDerivatives",
+                "input derivatives are not supported (canInterpolateInputs=\"false\")");
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    ENTER(GetRealOutputDerivatives, FOR_CS, MODES_GetRealOutputDerivatives);
+    (void)vr;
+    (void)order;
+    (void)value;
+    if (nvr == 0) return fmi2OK;
+    return fail(inst, "fmi2GetRealOutputDerivatives",
+                "output derivatives are not supported (maxOutputDerivativeOrder=\"0\")");
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentCommunicationPoint) {
+    const char *fn = "fmi2DoStep";
+    fmi2Status status;
+    char what[224];
+    double tol;
+    ENTER(DoStep, FOR_CS, MODES_DoStep);
+    (void)noSetFMUStatePriorToCurrentCommunicationPoint;
+    if (!isfinite(currentCommunicationPoint)) return fail(inst, fn, "currentCommunicationPoint is not finite");
+    if (!(communicationStepSize > 0.0) || !isfinite(communicationStepSize)) {
+        snprintf(what, sizeof(what), "communicationStepSize %g must be positive and finite", communicationStepSize);
+        return fail(inst, fn, what);
+    }
+    tol = 1e-9 * (fabs(inst->time) > 1.0 ? fabs(inst->time) : 1.0);
+    if (fabs(currentCommunicationPoint - inst->time) > tol) {
+        snprintf(what, sizeof(what), "currentCommunicationPoint %.17g differs from the FMU time %.17g",
+                 currentCommunicationPoint, inst->time);
+        return fail(inst, fn, what);
+    }
+    status = mw_do_step(inst, currentCommunicationPoint, communicationStepSize);
+    if (status == fmi2Discard) {
+        inst->mode = MW_MODE_STEP_FAILED;
+    } else if (status == fmi2Error) {
+        inst->mode = MW_MODE_ERROR;
+    }
+    return status;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    ENTER(CancelStep, FOR_CS, MODES_CancelStep);
+    return fail(inst, "fmi2CancelStep", "fmi2DoStep is synchronous: there is no step to cancel");
+}
+
+static fmi2Status status_unavailable(MwInstance *inst, const char *fn, int kind) {
+    mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: status kind %d is not available from this FMU", fn, kind);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    ENTER(GetStatus, FOR_CS, MODES_GetStatus);
+    if (null_arg(inst, "fmi2GetStatus", "value", value)) return fmi2Error;
+    return status_unavailable(inst, "fmi2GetStatus", (int)s);
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    ENTER(GetRealStatus, FOR_CS, MODES_GetStatus);
+    if (null_arg(inst, "fmi2GetRealStatus", "value", value)) return fmi2Error;
+    if (s != fmi2LastSuccessfulTime) return status_unavailable(inst, "fmi2GetRealStatus", (int)s);
+    *value = inst->last_successful_time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    ENTER(GetIntegerStatus, FOR_CS, MODES_GetStatus);
+    if (null_arg(inst, "fmi2GetIntegerStatus", "value", value)) return fmi2Error;
+    return status_unavailable(inst, "fmi2GetIntegerStatus", (int)s);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    ENTER(GetBooleanStatus, FOR_CS, MODES_GetStatus);
+    if (null_arg(inst, "fmi2GetBooleanStatus", "value", value)) return fmi2Error;
+    if (s != fmi2Terminated) return status_unavailable(inst, "fmi2GetBooleanStatus", (int)s);
+    *value = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    ENTER(GetStringStatus, FOR_CS, MODES_GetStatus);
+    if (null_arg(inst, "fmi2GetStringStatus", "value", value)) return fmi2Error;
+    return status_unavailable(inst, "fmi2GetStringStatus", (int)s);
+}

@@ -1,0 +1,440 @@
+/*
+ * Storage, logging, model evaluation, the co-simulation integrator and the
+ * FMU-state snapshots of one instance (see instance.h).
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "instance.h"
+
+static const char *const mw_category_names[MW_LOG_COUNT] = {
+    "logStatusWarning", "logStatusDiscard", "logStatusError", "logStatusFatal", "logCalls"};
+
+/* ------------------------------------------------------------------ memory */
+
+static size_t at_least_one(size_t n) { return n > 0 ? n : 1; }
+
+static int work_sizes(const MwFunction *f, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
+    mw_int a = 0, r = 0, i = 0, w = 0;
+    if (f->work == NULL || f->eval == NULL) return -1;
+    if (f->work(&a, &r, &i, &w) != 0) return -1;
+    if (a > *sz_arg) *sz_arg = a;
+    if (r > *sz_res) *sz_res = r;
+    if (i > *sz_iw) *sz_iw = i;
+    if (w > *sz_w) *sz_w = w;
+    return 0;
+}
+
+MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name,
+                            const fmi2CallbackFunctions *cb, fmi2Boolean logging_on) {
+    MwInstance *inst;
+    mw_int sz_arg = 6, sz_res = 2, sz_iw = 0, sz_w = 0;
+    size_t nx = model->nx, nu = model->nu, np = model->np, ny = model->ny;
+    size_t n_doubles, name_len;
+    double *d;
+
+    if (work_sizes(&model->ode, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
+        return NULL;
+    }
+    if (sz_arg < 0 || sz_res < 0 || sz_iw < 0 || sz_w < 0) return NULL;
+
+    inst = (MwInstance *)cb->allocateMemory(1, sizeof(MwInstance));
+    if (inst == NULL) return NULL;
+    memset(inst, 0, sizeof(*inst));
+    inst->cb = *cb;
+    inst->model = model;
+    inst->type = type;
+
+    name_len = strlen(name);
+    inst->name = (char *)cb->allocateMemory(name_len + 1, sizeof(char));
+    /* x, u, p, xdot, y; x_save, x_stage, k1..k4; dx, du, dp, dxdot, dy; w */
+    n_doubles = (nx + nu + np + nx + ny) + 6 * nx + (nx + nu + np + nx + ny) + (size_t)sz_w;
+    inst->block = (double *)cb->allocateMemory(at_least_one(n_doubles), sizeof(double));
+    inst->arg = (const double **)cb->allocateMemory((size_t)sz_arg, sizeof(const double *));
+    inst->res = (double **)cb->allocateMemory((size_t)sz_res, sizeof(double *));
+    inst->iw = (mw_int *)cb->allocateMemory(at_least_one((size_t)sz_iw), sizeof(mw_int));
+    if (inst->name == NULL || inst->block == NULL || inst->arg == NULL || inst->res == NULL || inst->iw == NULL) {
+        mw_instance_free(inst);
+        return NULL;
+    }
+    memcpy(inst->name, name, name_len + 1);
+
+    d = inst->block;
+    inst->x = d; d += nx;
+    inst->u = d; d += nu;
+    inst->p = d; d += np;
+    inst->xdot = d; d += nx;
+    inst->y = d; d += ny;
+    inst->x_save = d; d += nx;
+    inst->x_stage = d; d += nx;
+    inst->k1 = d; d += nx;
+    inst->k2 = d; d += nx;
+    inst->k3 = d; d += nx;
+    inst->k4 = d; d += nx;
+    inst->dx = d; d += nx;
+    inst->du = d; d += nu;
+    inst->dp = d; d += np;
+    inst->dxdot = d; d += nx;
+    inst->dy = d; d += ny;
+    inst->w = d;
+
+    inst->log_mask = (1u << MW_LOG_WARNING) | (1u << MW_LOG_DISCARD) | (1u << MW_LOG_ERROR) | (1u << MW_LOG_FATAL);
+    if (logging_on) inst->log_mask |= 1u << MW_LOG_CALLS;
+    inst->mode = MW_MODE_INSTANTIATED;
+    mw_set_start_values(inst);
+    inst->magic = MW_INSTANCE_MAGIC;
+    return inst;
+}
+
+void mw_instance_free(MwInstance *inst) {
+    fmi2CallbackFreeMemory release;
+    if (inst == NULL) return;
+    release = inst->cb.freeMemory;
+    inst->magic = 0;
+    if (inst->name != NULL) release(inst->name);
+    if (inst->block != NULL) release(inst->block);
+    if (inst->arg != NULL) release((void *)inst->arg);
+    if (inst->res != NULL) release(inst->res);
+    if (inst->iw != NULL) release(inst->iw);
+    release(inst);
+}
+
+void mw_invalidate(MwInstance *inst) {
+    inst->xdot_valid = 0;
+    inst->y_valid = 0;
+}
+
+void mw_set_start_values(MwInstance *inst) {
+    const MwModel *m = inst->model;
+    if (m->nx > 0) memcpy(inst->x, m->x_start, m->nx * sizeof(double));
+    if (m->nu > 0) memcpy(inst->u, m->u_start, m->nu * sizeof(double));
+    if (m->np > 0) memcpy(inst->p, m->p_start, m->np * sizeof(double));
+    inst->h_int = m->step_start;
+    inst->time = 0.0;
+    inst->last_successful_time = 0.0;
+    mw_invalidate(inst);
+}
+
+/* ----------------------------------------------------------------- logging */
+
+void mw_log(const MwInstance *inst, fmi2Status status, MwLogCategory category, const char *fmt, ...) {
+    char text[1024];
+    char escaped[2048];
+    size_t i, j;
+    va_list args;
+
+    if (inst == NULL || inst->cb.logger == NULL || category >= MW_LOG_COUNT) return;
+    if ((inst->log_mask & (1u << category)) == 0) return;
+
+    va_start(args, fmt);
+    vsnprintf(text, sizeof(text), fmt, args);
+    va_end(args);
+
+    /* The logger's message is itself a format string: protect every '%'. */
+    for (i = 0, j = 0; text[i] != '\0' && j + 2 < sizeof(escaped); i++) {
+        if (text[i] == '%') escaped[j++] = '%';
+        escaped[j++] = text[i];
+    }
+    escaped[j] = '\0';
+    inst->cb.logger(inst->cb.componentEnvironment, inst->name, status, mw_category_names[category], escaped);
+}
+
+fmi2Status mw_set_logging(MwInstance *inst, fmi2Boolean on, size_t n, const fmi2String categories[]) {
+    size_t i;
+    int k;
+    fmi2Status status = fmi2OK;
+
+    if (n == 0) {
+        inst->log_mask = on ? (1u << MW_LOG_COUNT) - 1u : 0u;
+        return fmi2OK;
+    }
+    for (i = 0; i < n; i++) {
+        unsigned int bits = 0;
+        if (categories[i] == NULL) {
+            mw_log(inst, fmi2Warning, MW_LOG_WARNING, "fmi2SetDebugLogging: category %u is NULL, ignored",
+                   (unsigned int)i);
+            status = fmi2Warning;
+            continue;
+        }
+        if (strcmp(categories[i], "logAll") == 0) {
+            bits = (1u << MW_LOG_COUNT) - 1u;
+        } else {
+            for (k = 0; k < MW_LOG_COUNT; k++) {
+                if (strcmp(categories[i], mw_category_names[k]) == 0) bits = 1u << k;
+            }
+        }
+        if (bits == 0) {
+            mw_log(inst, fmi2Warning, MW_LOG_WARNING,
+                   "fmi2SetDebugLogging: unknown log category \"%.100s\", ignored", categories[i]);
+            status = fmi2Warning;
+            continue;
+        }
+        if (on) {
+            inst->log_mask |= bits;
+        } else {
+            inst->log_mask &= ~bits;
+        }
+    }
+    return status;
+}
+
+/* -------------------------------------------------------------- evaluation */
+
+int mw_all_finite(const double *v, size_t n) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        if (!isfinite(v[i])) return 0;
+    }
+    return 1;
+}
+
+static int eval_ode(MwInstance *inst, const double *x, double *xdot) {
+    inst->arg[0] = x;
+    inst->arg[1] = inst->u;
+    inst->arg[2] = inst->p;
+    inst->res[0] = xdot;
+    return inst->model->ode.eval(inst->arg, inst->res, inst->iw, inst->w, 0) == 0 ? 0 : -1;
+}
+
+int mw_update_derivatives(MwInstance *inst) {
+    if (inst->xdot_valid) return 0;
+    if (eval_ode(inst, inst->x, inst->xdot) != 0) return -1;
+    inst->xdot_valid = 1;
+    return 0;
+}
+
+int mw_update_outputs(MwInstance *inst) {
+    if (inst->y_valid) return 0;
+    inst->arg[0] = inst->x;
+    inst->arg[1] = inst->u;
+    inst->arg[2] = inst->p;
+    inst->res[0] = inst->y;
+    if (inst->model->out.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+    inst->y_valid = 1;
+    return 0;
+}
+
+int mw_directional(MwInstance *inst, int need_dxdot, int need_dy) {
+    const MwModel *m = inst->model;
+    inst->arg[0] = inst->x;
+    inst->arg[1] = inst->u;
+    inst->arg[2] = inst->p;
+    inst->arg[3] = inst->dx;
+    inst->arg[4] = inst->du;
+    inst->arg[5] = inst->dp;
+    if (need_dxdot) {
+        inst->res[0] = inst->dxdot;
+        if (m->ode_dir.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+    }
+    if (need_dy) {
+        inst->res[0] = inst->dy;
+        if (m->out_dir.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+    }
+    return 0;
+}
+
+/* -------------------------------------------------------------- integrator */
+
+/* One classical Runge-Kutta step of length hs from inst->x, in place; inputs held. */
+static int rk4_step(MwInstance *inst, double hs) {
+    size_t i, nx = inst->model->nx;
+    double *x = inst->x, *s = inst->x_stage;
+    double *k1 = inst->k1, *k2 = inst->k2, *k3 = inst->k3, *k4 = inst->k4;
+    const double half = 0.5 * hs, sixth = hs / 6.0;
+
+    if (eval_ode(inst, x, k1) != 0) return -1;
+    for (i = 0; i < nx; i++) s[i] = x[i] + half * k1[i];
+    if (eval_ode(inst, s, k2) != 0) return -1;
+    for (i = 0; i < nx; i++) s[i] = x[i] + half * k2[i];
+    if (eval_ode(inst, s, k3) != 0) return -1;
+    for (i = 0; i < nx; i++) s[i] = x[i] + hs * k3[i];
+    if (eval_ode(inst, s, k4) != 0) return -1;
+    for (i = 0; i < nx; i++) x[i] += sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    return 0;
+}
+
+fmi2Status mw_do_step(MwInstance *inst, double tc, double h) {
+    const size_t nx = inst->model->nx;
+    double ratio = h / inst->h_int;
+    double n_real, hs;
+    unsigned long long n, k;
+
+    /* n = ceil(h / h_int), forgiving the rounding of h / h_int just above an integer. */
+    n_real = ceil(ratio * (1.0 - 1e-12));
+    if (n_real < 1.0) n_real = 1.0;
+    if (!(n_real <= 1e12)) {
+        mw_log(inst, fmi2Error, MW_LOG_ERROR,
+               "fmi2DoStep: communicationStepSize %g needs %g sub-steps of at most %g s, more than 1e12",
+               h, n_real, inst->h_int);
+        return fmi2Error;
+    }
+    n = (unsigned long long)n_real;
+    hs = h / (double)n;
+
+    if (nx > 0) memcpy(inst->x_save, inst->x, nx * sizeof(double));
+    mw_invalidate(inst);
+    for (k = 0; k < n; k++) {
+        if (rk4_step(inst, hs) != 0 || !mw_all_finite(inst->x, nx)) {
+            if (nx > 0) memcpy(inst->x, inst->x_save, nx * sizeof(double));
+            mw_invalidate(inst);
+            inst->last_successful_time = tc;
+            mw_log(inst, fmi2Discard, MW_LOG_DISCARD,
+                   "fmi2DoStep: the state became non-finite in sub-step %llu of %llu at t = %.17g; "
+                   "the state at the communication point %.17g is kept",
+                   k + 1, n, tc + (double)k * hs, tc);
+            return fmi2Discard;
+        }
+    }
+    inst->time = tc + h;
+    inst->last_successful_time = inst->time;
+    return fmi2OK;
+}
+
+/* --------------------------------------------------------------- snapshots */
+
+MwSnapshot *mw_snapshot_new(const MwInstance *inst) {
+    const MwModel *m = inst->model;
+    size_t nv = m->nx + m->nu + m->np;
+    MwSnapshot *snap = (MwSnapshot *)inst->cb.allocateMemory(1, sizeof(MwSnapshot) + nv * sizeof(double));
+    if (snap == NULL) return NULL;
+    snap->magic = MW_SNAPSHOT_MAGIC;
+    snap->model = m;
+    snap->mode = inst->mode;
+    snap->values = (double *)(void *)(snap + 1);
+    return snap;
+}
+
+void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap) {
+    const MwModel *m = inst->model;
+    snap->mode = inst->mode;
+    snap->time = inst->time;
+    snap->last_successful_time = inst->last_successful_time;
+    snap->h_int = inst->h_int;
+    if (m->nx > 0) memcpy(snap->values, inst->x, m->nx * sizeof(double));
+    if (m->nu > 0) memcpy(snap->values + m->nx, inst->u, m->nu * sizeof(double));
+    if (m->np > 0) memcpy(snap->values + m->nx + m->nu, inst->p, m->np * sizeof(double));
+}
+
+void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap) {
+    const MwModel *m = inst->model;
+    inst->mode = snap->mode;
+    inst->time = snap->time;
+    inst->last_successful_time = snap->last_successful_time;
+    inst->h_int = snap->h_int;
+    if (m->nx > 0) memcpy(inst->x, snap->values, m->nx * sizeof(double));
+    if (m->nu > 0) memcpy(inst->u, snap->values + m->nx, m->nu * sizeof(double));
+    if (m->np > 0) memcpy(inst->p, snap->values + m->nx + m->nu, m->np * sizeof(double));
+    mw_invalidate(inst);
+}
+
+int mw_mode_valid(const MwInstance *inst, unsigned int mode) {
+    unsigned int allowed = MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_TERMINATED | MW_MODE_ERROR;
+    if (inst->type == fmi2ModelExchange) {
+        allowed |= MW_MODE_EVENT | MW_MODE_CONTINUOUS;
+    } else {
+        allowed |= MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED;
+    }
+    /* exactly one bit, and an allowed one */
+    return mode != 0 && (mode & (mode - 1u)) == 0 && (mode & allowed) == mode;
+}
+
+/*
+ * Serialized FMU state, version 1, native byte order:
+ *   0   8 bytes  "MWFMUST1"
+ *   8   uint32   format version (1)
+ *  12   uint32   0x01020304, byte-order mark
+ *  16   uint64   total size in bytes
+ *  24   64 bytes GUID of the model, zero padded
+ *  88   uint32   nx, nu, np, mode
+ * 104   double   time, last successful time, internal step
+ * 128   double   x[nx], u[nu], p[np]
+ */
+#define MW_SER_MAGIC "MWFMUST1"
+#define MW_SER_VERSION 1u
+#define MW_SER_BOM 0x01020304u
+#define MW_SER_GUID 64u
+#define MW_SER_HEADER 128u
+
+size_t mw_serialized_size(const MwModel *m) {
+    return MW_SER_HEADER + (m->nx + m->nu + m->np) * sizeof(double);
+}
+
+static void put_u32(fmi2Byte *out, size_t at, unsigned int v) {
+    unsigned int w = v;
+    memcpy(out + at, &w, 4);
+}
+
+static unsigned int get_u32(const fmi2Byte *in, size_t at) {
+    unsigned int v;
+    memcpy(&v, in + at, 4);
+    return v;
+}
+
+void mw_serialize(const MwSnapshot *snap, fmi2Byte *out) {
+    const MwModel *m = snap->model;
+    unsigned long long total = (unsigned long long)mw_serialized_size(m);
+    size_t guid_len = strlen(m->guid);
+    size_t nv = m->nx + m->nu + m->np;
+
+    memset(out, 0, MW_SER_HEADER);
+    memcpy(out, MW_SER_MAGIC, 8);
+    put_u32(out, 8, MW_SER_VERSION);
+    put_u32(out, 12, MW_SER_BOM);
+    memcpy(out + 16, &total, 8);
+    memcpy(out + 24, m->guid, guid_len < MW_SER_GUID ? guid_len : MW_SER_GUID - 1);
+    put_u32(out, 88, (unsigned int)m->nx);
+    put_u32(out, 92, (unsigned int)m->nu);
+    put_u32(out, 96, (unsigned int)m->np);
+    put_u32(out, 100, snap->mode);
+    memcpy(out + 104, &snap->time, 8);
+    memcpy(out + 112, &snap->last_successful_time, 8);
+    memcpy(out + 120, &snap->h_int, 8);
+    if (nv > 0) memcpy(out + MW_SER_HEADER, snap->values, nv * sizeof(double));
+}
+
+const char *mw_deserialize(const MwInstance *inst, const fmi2Byte *in, size_t size, MwSnapshot *snap) {
+    const MwModel *m = inst->model;
+    size_t expected = mw_serialized_size(m);
+    size_t nv = m->nx + m->nu + m->np;
+    unsigned long long total;
+    char guid[MW_SER_GUID];
+    size_t guid_len = strlen(m->guid);
+    double t, tl, h;
+
+    if (size != expected) return "the size does not match this model's serialized FMU state";
+    if (memcmp(in, MW_SER_MAGIC, 8) != 0) return "the bytes are not a serialized FMU state of this wrapper";
+    if (get_u32(in, 8) != MW_SER_VERSION) return "unsupported format version";
+    if (get_u32(in, 12) != MW_SER_BOM) return "the byte order differs from this platform's";
+    memcpy(&total, in + 16, 8);
+    if (total != (unsigned long long)expected) return "the size recorded in the header is wrong";
+    memset(guid, 0, sizeof(guid));
+    memcpy(guid, m->guid, guid_len < MW_SER_GUID ? guid_len : MW_SER_GUID - 1);
+    if (memcmp(in + 24, guid, MW_SER_GUID) != 0) return "the state belongs to another model (GUID differs)";
+    if (get_u32(in, 88) != m->nx || get_u32(in, 92) != m->nu || get_u32(in, 96) != m->np)
+        return "the vector sizes differ from this model's";
+    if (!mw_mode_valid(inst, get_u32(in, 100))) return "the recorded mode is not valid for this instance type";
+    memcpy(&t, in + 104, 8);
+    memcpy(&tl, in + 112, 8);
+    memcpy(&h, in + 120, 8);
+    if (!isfinite(t) || !isfinite(tl) || !(h > 0.0) || !isfinite(h)) return "the recorded times are not valid";
+    if (nv > 0) {
+        /* check before touching the snapshot, so a bad buffer leaves it unchanged */
+        size_t i;
+        for (i = 0; i < nv; i++) {
+            double v;
+            memcpy(&v, in + MW_SER_HEADER + i * sizeof(double), sizeof(double));
+            if (!isfinite(v)) return "the recorded values are not finite";
+        }
+        memcpy(snap->values, in + MW_SER_HEADER, nv * sizeof(double));
+    }
+    snap->mode = get_u32(in, 100);
+    snap->time = t;
+    snap->last_successful_time = tl;
+    snap->h_int = h;
+    return NULL;
+}

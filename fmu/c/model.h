@@ -1,0 +1,83 @@
+/*
+ * The narrow contract between the FMI 2.0 wrapper (written once, fmi2_functions.c
+ * and instance.c) and one exported model (generated per robot: model_data.c and
+ * the CasADi code it points to).
+ *
+ * A model is a continuous-time system
+ *     xdot = ode(x, u, p),   y = out(x, u, p)
+ * with nx states, nu inputs, np parameters and ny outputs, plus the forward
+ * directional derivatives of both functions. Every FMI variable is one row of
+ * a table indexed by its value reference; a row says which vector the variable
+ * lives in (kind) and where (index). The wrapper never knows what the model is.
+ */
+#ifndef MW_MODEL_H
+#define MW_MODEL_H
+
+#include <stddef.h>
+
+#if defined(__GNUC__)
+#define MW_HIDDEN __attribute__((visibility("hidden")))
+#else
+#define MW_HIDDEN
+#endif
+
+/* Integer type of the CasADi generated code (its option casadi_int). */
+typedef long long int mw_int;
+
+/* Signature of a CasADi generated function and of its work-size query. */
+typedef int (*mw_eval_fn)(const double **arg, double **res, mw_int *iw, double *w, int mem);
+typedef int (*mw_work_fn)(mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
+
+typedef struct {
+    mw_eval_fn eval;
+    mw_work_fn work;
+} MwFunction;
+
+/* Where a variable lives. */
+typedef enum {
+    MW_KIND_STATE = 0,      /* x[index]; may also be an output of the FMU */
+    MW_KIND_DERIVATIVE = 1, /* xdot[index] = ode(x, u, p)[index] */
+    MW_KIND_INPUT = 2,      /* u[index] */
+    MW_KIND_PARAMETER = 3,  /* p[index] */
+    MW_KIND_OUTPUT = 4,     /* y[index] = out(x, u, p)[index] */
+    MW_KIND_STEP = 5        /* the co-simulation internal step, a fixed parameter */
+} MwKind;
+
+/* When a variable may be set (FMI 2.0 causality/variability/initial). */
+typedef enum {
+    MW_SET_NEVER = 0,   /* calculated: outputs, derivatives */
+    MW_SET_INITIAL = 1, /* initial="exact" states and fixed parameters: before initialisation ends */
+    MW_SET_TUNABLE = 2, /* tunable parameters: also at communication points / event mode */
+    MW_SET_INPUT = 3    /* inputs: at any time after instantiation */
+} MwSettable;
+
+typedef struct {
+    const char *name;       /* the FMI name, for log messages */
+    unsigned char kind;     /* MwKind */
+    unsigned char settable; /* MwSettable */
+    unsigned int index;
+    double min;             /* range enforced by fmi2SetReal; -HUGE_VAL/HUGE_VAL when none */
+    double max;
+} MwVariable;
+
+typedef struct {
+    const char *model_identifier;
+    const char *guid;
+    size_t nx, nu, np, ny;
+    size_t nvars;                 /* rows of variables[], value references 0..nvars-1 */
+    const MwVariable *variables;
+    const double *x_start;        /* nx */
+    const double *x_nominal;      /* nx */
+    const double *u_start;        /* nu */
+    const double *p_start;        /* np */
+    double step_start;            /* default internal step of the co-simulation integrator */
+    MwFunction ode;               /* (x, u, p) -> xdot */
+    MwFunction out;               /* (x, u, p) -> y */
+    MwFunction ode_dir;           /* (x, u, p, dx, du, dp) -> dxdot, forward mode */
+    MwFunction out_dir;           /* (x, u, p, dx, du, dp) -> dy, forward mode */
+} MwModel;
+
+/* Provided by the generated model_data.c. */
+MW_HIDDEN const MwModel *mw_model(void);
+
+#endif /* MW_MODEL_H */

@@ -1,0 +1,140 @@
+"""Run FMUs in libcosim (Open Simulation Platform), the second, independent importer.
+
+libcosimpy is a thin ctypes layer: a slave whose FMU failed to load is a NULL
+pointer, and adding it to an execution crashes the process. Every pointer and
+index is therefore checked here before use, and a failure raises
+:class:`CosimError` naming what failed.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+__all__ = ["CosimError", "CosimResult", "run_libcosim"]
+
+NS_PER_S = 1_000_000_000
+
+
+class CosimError(RuntimeError):
+    """libcosim refused a call (load, add, connect, step); the message says which and why."""
+
+
+@dataclass(frozen=True)
+class CosimResult:
+    """Samples of a libcosim run after every step: ``t`` (N,), per instance an (N, len(outputs)) array."""
+
+    t: np.ndarray
+    outputs: tuple[str, ...]
+    values: dict[str, np.ndarray]
+
+
+def _last_error() -> str:
+    from libcosimpy._internal import get_last_error_message
+
+    try:
+        return get_last_error_message()
+    except (OSError, AttributeError, UnicodeDecodeError):
+        return "no message from libcosim"
+
+
+def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: float,
+                 inputs: Callable[[float], Sequence[float]] | None = None,
+                 input_names: Sequence[str] = (), output_names: Sequence[str] = (),
+                 instances: Sequence[str] = ("robot_a", "robot_b"), start_values: dict[str, float] | None = None,
+                 quiet: bool = True) -> CosimResult:
+    """Simulate ``instances`` of one FMU side by side in libcosim with a fixed step.
+
+    Parameters
+    ----------
+    fmu_path
+        The FMU.
+    stop_time, step
+        End time and communication step, s (libcosim counts time in ns).
+    inputs
+        ``inputs(t)`` gives the input values held over the step starting at ``t``;
+        every instance receives the same values.
+    input_names, output_names
+        FMU variable names; outputs are sampled after every step.
+    instances
+        Instance names; each becomes one libcosim slave.
+    start_values
+        Initial values of parameters (by name), the same for every instance.
+    quiet
+        Set libcosim's (process-wide) log level to warnings; its default prints
+        every FMI call.
+    """
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    if quiet:
+        log_output_level(CosimLogLevel.WARNING)
+    path = Path(fmu_path).resolve()
+    if not path.is_file():
+        raise CosimError(f"fmu_path: expected an FMU file, got {str(path)!r}")
+    step_ns = int(round(step * NS_PER_S))
+    if step_ns <= 0:
+        raise CosimError(f"step: expected at least 1 ns, got {step!r} s")
+    n_steps = int(round(stop_time / step))
+
+    execution = CosimExecution.from_step_size(step_ns)
+    slaves = []
+    indices: dict[str, int] = {}
+    for name in instances:
+        slave = CosimLocalSlave(str(path), name)
+        if not slave.ptr():  # a NULL slave would crash cosim_execution_add_slave
+            raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {_last_error()}")
+        index = execution.add_local_slave(slave)
+        if index is None or index < 0:
+            raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {_last_error()}")
+        slaves.append(slave)
+        indices[name] = index
+
+    references: dict[int, dict[str, int]] = {}
+    for name, index in indices.items():
+        refs = {v.name.decode(): int(v.reference) for v in execution.slave_variables(index)}
+        missing = [n for n in [*input_names, *output_names, *(start_values or {})] if n not in refs]
+        if missing:
+            raise CosimError(f"instance {name!r}: no variables {missing} in {path.name}")
+        references[index] = refs
+        for var, value in (start_values or {}).items():
+            if not execution.real_initial_value(index, refs[var], float(value)):
+                raise CosimError(f"libcosim refused the initial value {var} = {value}: {_last_error()}")
+
+    manipulator = CosimManipulator.create_override()
+    observer = CosimObserver.create_last_value()
+    if not execution.add_manipulator(manipulator) or not execution.add_observer(observer):
+        raise CosimError(f"libcosim refused the manipulator or the observer: {_last_error()}")
+
+    t = np.arange(1, n_steps + 1) * step  # t0 + k h from the step counter, after each step
+    values = {name: np.zeros((n_steps, len(output_names))) for name in indices}
+
+    def sample(k: int) -> None:
+        for name, index in indices.items():
+            vrs = [references[index][n] for n in output_names]
+            values[name][k] = observer.last_real_values(index, vrs) if vrs else []
+
+    def apply(time: float) -> None:
+        if inputs is None or not input_names:
+            return
+        u = [float(v) for v in inputs(time)]
+        for index in indices.values():
+            vrs = [references[index][n] for n in input_names]
+            if not manipulator.slave_real_values(index, vrs, u):
+                raise CosimError(f"libcosim refused the inputs at t = {time}: {_last_error()}")
+
+    for k in range(n_steps):
+        apply(k * step)
+        if not execution.step(1):
+            raise CosimError(f"libcosim step {k + 1} (t = {k * step:.6g} s) failed: {_last_error()}")
+        sample(k)
+    del execution  # before the slaves, manipulator and observer it uses
+    del observer, manipulator, slaves
+    return CosimResult(t, tuple(output_names), values)

@@ -1,0 +1,36 @@
+/* generated, do not edit: rendered by fmu/variables.py from the FMU's variable table */
+#include <math.h>
+#include <stddef.h>
+
+#include "model.h"
+#include "model_data.h"
+#include "$casadi_header"
+
+/* one row per value reference: name, kind, settable, index, min, max */
+static const MwVariable mw_variables[MW_NVARS] = {
+$variable_rows
+};
+
+static const double mw_x_start[] = $x_start;
+static const double mw_x_nominal[] = $x_nominal;
+static const double mw_u_start[] = $u_start;
+static const double mw_p_start[] = $p_start;
+
+static const MwModel mw_model_data = {
+    MW_MODEL_IDENTIFIER,
+    MW_GUID,
+    MW_NX, MW_NU, MW_NP, MW_NY,
+    MW_NVARS,
+    mw_variables,
+    mw_x_start,
+    mw_x_nominal,
+    mw_u_start,
+    mw_p_start,
+    $step_start,
+    {$ode, ${ode}_work},
+    {$out, ${out}_work},
+    {$ode_dir, ${ode_dir}_work},
+    {$out_dir, ${out_dir}_work},
+};
+
+const MwModel *mw_model(void) { return &mw_model_data; }

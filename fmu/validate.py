@@ -1,0 +1,606 @@
+"""Validate an exported FMU: description, binary, simulations against the Python model.
+
+:func:`validate_fmu` runs every check and returns a :class:`ValidationReport`:
+
+* FMPy's validation of ``modelDescription.xml`` (schema, names, units, ModelStructure);
+* the binary: it exports the ``fmi2`` functions only and needs only libc and libm;
+* Co-Simulation and Model Exchange (CVode) runs by FMPy against the Python plant
+  integrated by :func:`scipy.integrate.solve_ivp` at a tight tolerance, on the
+  computed-torque feed-forward of the robot's task (open loop, so over a short
+  horizon where the comparison is meaningful);
+* FMU state get/set and serialise/deserialise round trips, bit for bit;
+* directional derivatives against central finite differences;
+* libcosim, the second importer: two instances side by side, against FMPy.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+__all__ = [
+    "TOLERANCES",
+    "ME_RTOL",
+    "TorqueProfile",
+    "TrackingError",
+    "RoundTrip",
+    "ValidationReport",
+    "feedforward_profile",
+    "reference_response",
+    "model_description_problems",
+    "binary_problems",
+    "fmu_robot",
+    "tracking_error",
+    "state_roundtrip",
+    "directional_derivative_error",
+    "validate_fmu",
+]
+
+#: Acceptance limits of :meth:`ValidationReport.problems` (rad or m for positions, rad/s or m/s for velocities).
+TOLERANCES = {
+    "cs_q": 1e-9,        # RK4 at 1 ms against solve_ivp at rtol 1e-11 (seen: 3e-13)
+    "cs_qd": 1e-9,
+    "me_q": 1e-5,        # FMPy's CVode at rtol 1e-10 (seen: 5e-8 SCARA, 2e-6 Puma 560)
+    "me_qd": 1e-5,
+    "cosim": 1e-12,      # libcosim against FMPy: the same binary, the same arithmetic
+    "directional": 1e-6, # |AD - FD| / (1 + |FD|), central differences of relative step 1e-5 (seen: 7e-8)
+}
+ME_RTOL = 1e-10
+
+Progress = Callable[[str], None]
+
+
+def _say(progress: Progress | None, message: str) -> None:
+    if progress is not None:
+        progress(message)
+
+
+# ------------------------------------------------------------ torque profile
+
+@dataclass(frozen=True)
+class TorqueProfile:
+    """Piecewise-constant motor torques: ``tau_m[i]`` (N m, motor side) holds on ``[t_switch[i], t_switch[i+1])``."""
+
+    t_switch: np.ndarray
+    tau_m: np.ndarray
+    t_end: float
+    q_plan: np.ndarray  # (K + 1, n) planned joint positions at t_switch and t_end
+    description: str
+
+    def at(self, t: float) -> np.ndarray:
+        """The torques held at time ``t``."""
+        i = int(np.searchsorted(self.t_switch, t + 1e-12 * max(1.0, abs(t)), side="right")) - 1
+        return self.tau_m[min(max(i, 0), self.tau_m.shape[0] - 1)]
+
+    @property
+    def hold(self) -> float:
+        return float(self.t_switch[1] - self.t_switch[0]) if self.t_switch.size > 1 else self.t_end
+
+
+def feedforward_profile(robot: Any, t_end: float = 3.0, hold: float = 0.01) -> TorqueProfile:
+    """Computed-torque feed-forward of the robot's task, held for ``hold`` s at a time.
+
+    The SCARA follows the seed's pick-and-place (first segment: rest to above
+    the pick point in 3 s); other robots a quintic from rest, +0.5 rad or m per
+    joint (within the limits). Motor torques are ``robot.rne(q, qd, qdd) / G``
+    at the middle of each hold interval.
+    """
+    from model.tasks import PICK_AND_PLACE, pick_and_place
+    from model.trajectory import jtraj
+
+    k = int(round(t_end / hold))
+    if k < 1 or abs(k * hold - t_end) > 1e-9 * t_end:
+        raise ValueError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
+    if robot.name == PICK_AND_PLACE.robot:
+        traj = pick_and_place(robot.description)
+        what = "pick-and-place of seed 000 (first segment: rest to A)"
+    else:
+        lo, hi = robot.qlim
+        q0 = robot.q_rest
+        q1 = np.clip(q0 + 0.5, lo, hi)
+        traj = jtraj(q0, q1, T=t_end, dt=hold)
+        what = "quintic from rest, +0.5 per joint"
+    t_switch = np.arange(k) * hold
+    t_mid = t_switch + 0.5 * hold
+    samples = [traj.sample(float(t)) for t in t_mid]
+    Q, QD, QDD = (np.array([s[j] for s in samples]) for j in range(3))
+    tau = robot.rne_batch(Q, QD, QDD)
+    q_plan = np.array([traj.sample(float(t))[0] for t in np.append(t_switch, t_end)])
+    return TorqueProfile(t_switch, tau / robot.gear_ratio, float(t_end), q_plan,
+                         f"{what}: computed-torque feed-forward, held {hold * 1e3:g} ms")
+
+
+def reference_response(plant: Any, profile: TorqueProfile, p: np.ndarray | None = None,
+                       x0: np.ndarray | None = None, rtol: float = 1e-11, atol: float = 1e-12
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """The Python plant under ``profile``: times ``t_switch`` and ``t_end``, and the states there.
+
+    Each hold interval is one :func:`scipy.integrate.solve_ivp` (DOP853) run with
+    constant input, so the piecewise-constant torque costs the solver no accuracy.
+    """
+    from scipy.integrate import solve_ivp
+
+    p = np.asarray(plant.param_defaults if p is None else p, dtype=float)
+    x = np.asarray(plant.x0 if x0 is None else x0, dtype=float).copy()
+    ode = plant.ode
+    t = np.append(profile.t_switch, profile.t_end)
+    X = np.zeros((t.size, x.size))
+    X[0] = x
+    for i in range(profile.t_switch.size):
+        u = profile.tau_m[i]
+
+        def f(_t: float, xv: np.ndarray, u: np.ndarray = u) -> np.ndarray:
+            return np.asarray(ode(xv, u, p)).reshape(-1)
+
+        sol = solve_ivp(f, (t[i], t[i + 1]), x, method="DOP853", rtol=rtol, atol=atol)
+        if not sol.success:
+            raise RuntimeError(f"reference solve_ivp failed on [{t[i]}, {t[i + 1]}]: {sol.message}")
+        x = sol.y[:, -1]
+        X[i + 1] = x
+    return t, X
+
+
+# ------------------------------------------------------- description, binary
+
+def model_description_problems(fmu_path: str | os.PathLike[str]) -> list[str]:
+    """FMPy's validation of the FMU (schema, variable names, units, ModelStructure)."""
+    from fmpy.validation import validate_fmu as fmpy_validate_fmu
+
+    return list(fmpy_validate_fmu(str(fmu_path)))
+
+
+def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[str, Any]]:
+    """Check the FMU's binary: only ``fmi2`` functions exported, only libc and libm needed.
+
+    Returns the problems and facts (``exports``, ``needed``) for the report.
+    """
+    problems: list[str] = []
+    facts: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory(prefix="mw_fmu_check_") as tmp, zipfile.ZipFile(fmu_path) as zf:
+        binaries = [n for n in zf.namelist() if n.startswith("binaries/") and n.endswith(".so")]
+        if not binaries:
+            return [f"{fmu_path}: no binaries/*/*.so in the FMU"], facts
+        lib = Path(zf.extract(binaries[0], tmp))
+        tools = [t for t in ("nm", "readelf") if shutil.which(t) is None]
+        if tools:
+            return [f"binary check: expected {tools} on PATH (binutils)"], facts
+        nm = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True)
+        exports = sorted(line.split()[-1] for line in nm.stdout.splitlines() if line.strip())
+        others = [s for s in exports if not s.startswith("fmi2")]
+        if others:
+            problems.append(f"{binaries[0]} exports non-FMI symbols: {others}")
+        facts["exports"] = len(exports)
+        elf = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True, check=True)
+        needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", elf.stdout)
+        extra = [lib_name for lib_name in needed if not re.fullmatch(r"lib(c|m)\.so\.\d+", lib_name)]
+        if extra:
+            problems.append(f"{binaries[0]} needs libraries beyond libc and libm: {extra}")
+        facts["needed"] = needed
+    return problems, facts
+
+
+def fmu_robot(fmu_path: str | os.PathLike[str]) -> tuple[str, str] | None:
+    """``(robot, motor_model)`` recorded in the FMU's VendorAnnotations, or None for other FMUs."""
+    with zipfile.ZipFile(fmu_path) as zf:
+        root = ET.fromstring(zf.read("modelDescription.xml"))
+    node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")
+    if node is None or not node.get("name"):
+        return None
+    return node.get("name", ""), node.get("motorModel", "reflected")
+
+
+# ---------------------------------------------------------------- tracking
+
+@dataclass(frozen=True)
+class TrackingError:
+    """Largest deviation of an FMU run from the reference over the horizon, per joint."""
+
+    label: str
+    horizon: float
+    q: np.ndarray
+    qd: np.ndarray
+    tool_position: float
+
+    def line(self) -> str:
+        return (f"{self.label:<28} max|q - q_ref| = {self.q.max():.3e}   max|qd - qd_ref| = {self.qd.max():.3e}   "
+                f"max|p_tool - p_ref| = {self.tool_position:.3e} m   (over {self.horizon:g} s)")
+
+
+def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_ref: np.ndarray,
+                   X_ref: np.ndarray, P_ref: np.ndarray) -> TrackingError:
+    """Compare states ``X`` and tool positions ``P`` sampled at ``t`` with the reference at ``t_ref``."""
+    idx = [int(np.argmin(np.abs(t - tr))) for tr in t_ref]
+    if np.max(np.abs(t[idx] - t_ref)) > 1e-9:
+        raise ValueError("tracking_error: the run does not sample every reference time")
+    n = X.shape[1] // 2
+    dX = np.abs(X[idx] - X_ref)
+    dP = np.linalg.norm(P[idx] - P_ref, axis=1)
+    return TrackingError(label, float(t_ref[-1] - t_ref[0]), dX[:, :n].max(axis=0), dX[:, n:].max(axis=0),
+                         float(dP.max()))
+
+
+# ---------------------------------------------------------- low-level checks
+
+@dataclass(frozen=True)
+class RoundTrip:
+    """FMU-state round trips of a Co-Simulation run (bit-for-bit comparisons)."""
+
+    steps_before: int
+    steps_after: int
+    serialized_size: int
+    get_set_identical: bool
+    deserialized_identical: bool
+    me_identical: bool
+
+    @property
+    def ok(self) -> bool:
+        return self.get_set_identical and self.deserialized_identical and self.me_identical
+
+
+def _vrs(md: Any, names: Sequence[str]) -> list[int]:
+    by_name = {v.name: v.valueReference for v in md.modelVariables}
+    return [by_name[n] for n in names]
+
+
+def _slave(fmu_path: str | os.PathLike[str], unzip_dir: str, name: str, kind: str = "cs") -> Any:
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Model, FMU2Slave
+
+    md = read_model_description(str(fmu_path))
+    cls = FMU2Slave if kind == "cs" else FMU2Model
+    ident = md.coSimulation.modelIdentifier if kind == "cs" else md.modelExchange.modelIdentifier
+    return cls(guid=md.guid, unzipDirectory=unzip_dir, modelIdentifier=ident, instanceName=name)
+
+
+def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], Sequence[float]],
+                    input_names: Sequence[str], output_names: Sequence[str], step: float = 1e-3,
+                    steps_before: int = 500, steps_after: int = 500) -> RoundTrip:
+    """Run, save the FMU state, run on; restore (and deserialise in a second instance) and run again.
+
+    All three continuations must agree bit for bit. Model Exchange: derivatives
+    after ``fmi2SetFMUstate`` must equal those when the state was taken.
+    """
+    from fmpy import extract, read_model_description
+
+    md = read_model_description(str(fmu_path))
+    vin, vout = _vrs(md, input_names), _vrs(md, output_names)
+    unzip = extract(str(fmu_path))
+    try:
+        def start(name: str) -> Any:
+            s = _slave(fmu_path, unzip, name)
+            s.instantiate()
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            s.exitInitializationMode()
+            return s
+
+        def run(s: Any, k0: int, n: int) -> np.ndarray:
+            out = np.zeros((n, len(vout)))
+            for k in range(k0, k0 + n):
+                t = k * step
+                s.setReal(vin, list(inputs(t)))
+                s.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+                out[k - k0] = s.getReal(vout)
+            return out
+
+        a = start("roundtrip_a")
+        run(a, 0, steps_before)
+        state = a.getFMUstate()
+        data = a.serializeFMUstate(state)
+        first = run(a, steps_before, steps_after)
+        a.setFMUstate(state)
+        again = run(a, steps_before, steps_after)
+        a.freeFMUstate(state)
+
+        b = start("roundtrip_b")
+        state_b = b.deSerializeFMUstate(data)
+        b.setFMUstate(state_b)
+        restored = run(b, steps_before, steps_after)
+        b.freeFMUstate(state_b)
+        for s in (a, b):
+            s.terminate()
+            s.freeInstance()
+
+        me_same = _me_roundtrip(fmu_path, unzip, md)
+    finally:
+        shutil.rmtree(unzip, ignore_errors=True)
+    return RoundTrip(steps_before, steps_after, len(data),
+                     first.tobytes() == again.tobytes(), first.tobytes() == restored.tobytes(), me_same)
+
+
+def _me_roundtrip(fmu_path: str | os.PathLike[str], unzip: str, md: Any) -> bool:
+    nx = len(md.derivatives)
+    m = _slave(fmu_path, unzip, "roundtrip_me", kind="me")
+    m.instantiate()
+    m.setupExperiment(startTime=0.0)
+    m.enterInitializationMode()
+    m.exitInitializationMode()
+    m.enterContinuousTimeMode()
+    rng = np.random.default_rng(1)
+    x1 = _states(m, nx) + 0.1 * rng.standard_normal(nx)
+    _set_states(m, x1)
+    d1 = _derivatives(m, nx)
+    state = m.getFMUstate()
+    data = m.serializeFMUstate(state)
+    _set_states(m, x1 + 1.0)
+    m.setFMUstate(state)
+    d2 = _derivatives(m, nx)
+    _set_states(m, x1 - 1.0)
+    state2 = m.deSerializeFMUstate(data)
+    m.setFMUstate(state2)
+    d3 = _derivatives(m, nx)
+    m.freeFMUstate(state)
+    m.freeFMUstate(state2)
+    m.terminate()
+    m.freeInstance()
+    return d1.tobytes() == d2.tobytes() == d3.tobytes()
+
+
+def _states(m: Any, nx: int) -> np.ndarray:
+    from fmpy.fmi2 import fmi2Real
+
+    buf = (fmi2Real * nx)()
+    m.fmi2GetContinuousStates(m.component, buf, nx)
+    return np.array(buf[:])
+
+
+def _set_states(m: Any, x: np.ndarray) -> None:
+    from fmpy.fmi2 import fmi2Real
+
+    buf = (fmi2Real * x.size)(*x)
+    m.fmi2SetContinuousStates(m.component, buf, x.size)
+
+
+def _derivatives(m: Any, nx: int) -> np.ndarray:
+    from fmpy.fmi2 import fmi2Real
+
+    buf = (fmi2Real * nx)()
+    m.fmi2GetDerivatives(m.component, buf, nx)
+    return np.array(buf[:])
+
+
+def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7,
+                                 rel_step: float = 1e-5) -> tuple[float, int]:
+    """Largest ``|AD - FD| / (1 + |FD|)`` over the Jacobian of derivatives and outputs (Model Exchange).
+
+    Knowns: every state, every input and every tunable parameter; the point is
+    a seeded random perturbation of the start state with random inputs; the
+    central differences step ``rel_step * max(1, |value|)``.
+    Returns the error and the number of Jacobian entries compared.
+    """
+    from fmpy import extract, read_model_description
+
+    md = read_model_description(str(fmu_path))
+    unzip = extract(str(fmu_path))
+    try:
+        variables = sorted(md.modelVariables, key=lambda v: v.valueReference)
+        derivs = [u.variable for u in md.derivatives]
+        states = [d.derivative for d in derivs]
+        state_vrs = {s.valueReference for s in states}
+        outputs = [v for v in variables if v.causality == "output" and v.valueReference not in state_vrs]
+        inputs = [v for v in variables if v.causality == "input"]
+        params = [v for v in variables if v.causality == "parameter" and v.variability == "tunable"]
+        unknowns = [v.valueReference for v in derivs + outputs]
+        nx = len(states)
+        rng = np.random.default_rng(seed)
+
+        m = _slave(fmu_path, unzip, "directional", kind="me")
+        m.instantiate()
+        m.setupExperiment(startTime=0.0)
+        m.enterInitializationMode()
+        m.exitInitializationMode()
+        m.enterContinuousTimeMode()
+        x = _states(m, nx) + 0.2 * rng.standard_normal(nx)
+        _set_states(m, x)
+        u = 0.05 * rng.standard_normal(len(inputs))
+        m.setReal([v.valueReference for v in inputs], list(u))
+        # move parameters that sit on a bound (no payload, no Coulomb friction) inside their range
+        m.enterEventMode()
+        for v in params:
+            value = m.getReal([v.valueReference])[0]
+            lo = float(v.min) if v.min is not None else -np.inf
+            hi = float(v.max) if v.max is not None else np.inf
+            if value - lo < 1e-3:
+                m.setReal([v.valueReference], [lo + 0.5])
+            elif hi - value < 1e-3:
+                m.setReal([v.valueReference], [hi - 0.5])
+        m.enterContinuousTimeMode()
+
+        def evaluate() -> np.ndarray:
+            return np.concatenate([_derivatives(m, nx), np.array(m.getReal([v.valueReference for v in outputs]))])
+
+        def set_param(vr: int, value: float) -> None:
+            m.enterEventMode()
+            m.setReal([vr], [value])
+            m.enterContinuousTimeMode()
+
+        worst, count = 0.0, 0
+        for j, known in enumerate(states + inputs + params):
+            ad = np.array(m.getDirectionalDerivative(unknowns, [known.valueReference], [1.0]))
+            if j < nx:
+                base = x[j]
+            else:
+                base = m.getReal([known.valueReference])[0]
+            h = rel_step * max(1.0, abs(base))
+            values = []
+            for sign in (1.0, -1.0):
+                if j < nx:
+                    xp = x.copy()
+                    xp[j] = base + sign * h
+                    _set_states(m, xp)
+                elif known in inputs:
+                    m.setReal([known.valueReference], [base + sign * h])
+                else:
+                    set_param(known.valueReference, base + sign * h)
+                values.append(evaluate())
+            if j < nx:
+                _set_states(m, x)
+            elif known in inputs:
+                m.setReal([known.valueReference], [base])
+            else:
+                set_param(known.valueReference, base)
+            fd = (values[0] - values[1]) / (2.0 * h)
+            worst = max(worst, float(np.max(np.abs(ad - fd) / (1.0 + np.abs(fd)))))
+            count += ad.size
+        m.terminate()
+        m.freeInstance()
+    finally:
+        shutil.rmtree(unzip, ignore_errors=True)
+    return worst, count
+
+
+# ------------------------------------------------------------------ report
+
+@dataclass
+class ValidationReport:
+    """Everything :func:`validate_fmu` found; :meth:`problems` lists what failed, :meth:`format` prints it."""
+
+    fmu: str
+    description_problems: list[str]
+    binary_problems: list[str]
+    binary_facts: dict[str, Any]
+    robot: tuple[str, str] | None = None
+    profile: str = ""
+    plan_drift: float = float("nan")
+    errors: list[TrackingError] = field(default_factory=list)
+    roundtrip: RoundTrip | None = None
+    directional: tuple[float, int] | None = None
+    cosim_between_instances: float | None = None
+    cosim_vs_fmpy: float | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def problems(self) -> list[str]:
+        found = list(self.description_problems) + list(self.binary_problems)
+        for e in self.errors:
+            kind = "cs" if e.label.startswith("Co-Simulation") else "me"
+            if e.q.max() > TOLERANCES[f"{kind}_q"] or e.qd.max() > TOLERANCES[f"{kind}_qd"]:
+                found.append(f"{e.label}: error above the tolerances {TOLERANCES[kind + '_q']:g} / "
+                             f"{TOLERANCES[kind + '_qd']:g}: {e.line()}")
+        if self.roundtrip is not None and not self.roundtrip.ok:
+            found.append(f"FMU state round trip not bit for bit: {self.roundtrip}")
+        if self.directional is not None and self.directional[0] > TOLERANCES["directional"]:
+            found.append(f"directional derivatives differ from finite differences by {self.directional[0]:.3e}")
+        for label, value in (("between libcosim instances", self.cosim_between_instances),
+                             ("libcosim vs FMPy", self.cosim_vs_fmpy)):
+            if value is not None and value > TOLERANCES["cosim"]:
+                found.append(f"{label}: largest difference {value:.3e}")
+        return found
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems()
+
+    def format(self) -> str:
+        lines = [f"FMU {self.fmu}"]
+        lines.append(f"  modelDescription.xml (FMPy validation): {len(self.description_problems)} problems")
+        lines += [f"    - {p}" for p in self.description_problems]
+        facts = self.binary_facts
+        lines.append(f"  binary: {facts.get('exports', '?')} exported symbols, needs {facts.get('needed', '?')}: "
+                     f"{len(self.binary_problems)} problems")
+        lines += [f"    - {p}" for p in self.binary_problems]
+        if self.robot is not None:
+            lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors); input: {self.profile}")
+            lines += [f"  note: {note}" for note in self.notes]
+            lines.append(f"  open loop: the Python model leaves the planned path by {self.plan_drift:.3e} "
+                         f"(max |q - q_plan|) over the horizon")
+            for e in self.errors:
+                lines.append("  " + e.line())
+        else:
+            lines.append("  no robot recorded in VendorAnnotations: simulations against the Python model not run")
+        if self.roundtrip is not None:
+            r = self.roundtrip
+            lines.append(f"  FMU state: {r.serialized_size}-byte serialisation; after {r.steps_before} + "
+                         f"{r.steps_after} steps get/set {'identical' if r.get_set_identical else 'DIFFERENT'}, "
+                         f"deserialised in a second instance {'identical' if r.deserialized_identical else 'DIFFERENT'}, "
+                         f"Model Exchange {'identical' if r.me_identical else 'DIFFERENT'} (bit for bit)")
+        if self.directional is not None:
+            lines.append(f"  directional derivatives vs central differences: max |AD - FD| / (1 + |FD|) = "
+                         f"{self.directional[0]:.3e} over {self.directional[1]} entries")
+        if self.cosim_between_instances is not None:
+            lines.append(f"  libcosim, two instances: max difference between them {self.cosim_between_instances:.3e}, "
+                         f"against FMPy Co-Simulation {self.cosim_vs_fmpy:.3e}")
+        found = self.problems()
+        lines.append(f"  result: {'OK' if not found else f'{len(found)} problems'}")
+        return "\n".join(lines)
+
+
+def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: float = 1e-3,
+             with_cosim: bool = True, progress: Progress | None = None) -> ValidationReport:
+    """Run every check on an FMU (see the module docstring); ``t_end`` is the simulated horizon, s."""
+    fmu_path = str(fmu_path)
+    _say(progress, "validating modelDescription.xml with FMPy")
+    report = ValidationReport(fmu_path, model_description_problems(fmu_path), *binary_problems(fmu_path))
+    report.robot = fmu_robot(fmu_path)
+    if report.robot is None:
+        return report
+
+    from model import load_robot
+    from model.plant import build_plant
+
+    from .simulate import simulate_cs, simulate_me, step_input
+
+    robot = load_robot(report.robot[0], motor_model=report.robot[1])
+    n = robot.n
+    plant = build_plant(robot)
+    p_ref = np.array(plant.param_defaults, dtype=float)
+    start: dict[str, float] = {}
+    coulomb = [i for i, name in enumerate(plant.param_names) if name.startswith("coulomb_friction")]
+    if np.any(p_ref[coulomb] != 0.0):
+        # Coulomb friction switches at qd = 0; where the open-loop arm sticks, a tight-tolerance
+        # reference chatters without end. The comparison runs without it, in all three models.
+        p_ref[coulomb] = 0.0
+        start = {plant.param_names[i]: 0.0 for i in coulomb}
+        robot.dynamics.set_friction(coulomb_pos=np.zeros(n), coulomb_neg=np.zeros(n))
+        report.notes.append("Coulomb friction set to 0 for the comparison (a switch at qd = 0: an open-loop arm "
+                            "that sticks makes a tight-tolerance reference chatter)")
+    _say(progress, f"computed-torque feed-forward over {t_end:g} s")
+    profile = feedforward_profile(robot, t_end=t_end)
+    report.profile = profile.description
+    _say(progress, "reference: the Python plant with solve_ivp (DOP853, rtol 1e-11)")
+    t_ref, X_ref = reference_response(plant, profile, p=p_ref)
+    report.plan_drift = float(np.max(np.abs(X_ref[:, :n] - profile.q_plan)))
+    u_mid = np.vstack([profile.tau_m, profile.tau_m[-1]])
+    P_ref = np.array([np.asarray(plant.out(x, u, p_ref)).reshape(-1)[3 * n:3 * n + 3]
+                      for x, u in zip(X_ref, u_mid)])
+
+    tau_names = [f"tau_m[{i}]" for i in range(1, n + 1)]
+    state_names = [f"q[{i}]" for i in range(1, n + 1)] + [f"qd[{i}]" for i in range(1, n + 1)]
+    tool_names = [plant.output_names[3 * n + k] for k in range(3)]
+    table = step_input(tau_names, profile.t_switch, profile.tau_m)
+    _say(progress, f"FMPy Co-Simulation, communication step {step:g} s")
+    cs = simulate_cs(fmu_path, t_end, step, inputs=table, outputs=state_names + tool_names, start_values=start)
+    report.errors.append(tracking_error(f"Co-Simulation (RK4, h={step:g})", cs.t, cs.stack(state_names),
+                                        cs.stack(tool_names), t_ref, X_ref, P_ref))
+    _say(progress, f"FMPy Model Exchange with CVode, rtol {ME_RTOL:g}")
+    me = simulate_me(fmu_path, t_end, step, inputs=table, outputs=state_names + tool_names,
+                     start_values=start, relative_tolerance=ME_RTOL)
+    report.errors.append(tracking_error(f"Model Exchange (CVode {ME_RTOL:g})", me.t, me.stack(state_names),
+                                        me.stack(tool_names), t_ref, X_ref, P_ref))
+
+    _say(progress, "FMU state get/set and serialisation round trips")
+    report.roundtrip = state_roundtrip(fmu_path, profile.at, tau_names, state_names + tool_names, step=step)
+    _say(progress, "directional derivatives against finite differences")
+    report.directional = directional_derivative_error(fmu_path)
+
+    if with_cosim:
+        from .cosim import run_libcosim
+
+        _say(progress, "libcosim: two instances side by side")
+        res = run_libcosim(fmu_path, stop_time=t_end, step=step, inputs=profile.at, input_names=tau_names,
+                           output_names=state_names + tool_names, start_values=start)
+        a, b = (res.values[k] for k in res.values)
+        report.cosim_between_instances = float(np.max(np.abs(a - b)))
+        fm = cs.stack(state_names + tool_names)
+        idx = [int(round(tk / step)) for tk in res.t]
+        report.cosim_vs_fmpy = float(np.max(np.abs(a - fm[idx])))
+    return report

@@ -1,0 +1,570 @@
+"""The FMU's variable table: the one list both the C side and the XML come from.
+
+A :class:`ModelSpec` says what an FMU is built from (the CasADi ``ode`` and
+``out`` Functions and, for every entry of x, u, p and y, a name, a unit and a
+description). :func:`build_table` turns it into a :class:`VariableTable`: the
+value reference, causality, variability, start value and range of every FMI
+variable, and the dependencies of the ModelStructure taken from the exact
+sparsity of the CasADi Jacobians. The table then renders, through the
+templates in ``fmu/templates/``:
+
+* ``modelDescription.xml`` (:meth:`VariableTable.model_description`),
+* ``model_data.h``, the value references as C macros (:meth:`VariableTable.model_data_h`),
+* ``model_data.c``, the model contract of ``fmu/c/model.h`` (:meth:`VariableTable.model_data_c`).
+
+Value references are the row numbers of the table, so the wrapper finds a
+variable in O(1) and nothing is kept by hand in two places.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import string
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+from xml.sax.saxutils import quoteattr
+
+import casadi as ca
+import numpy as np
+
+__all__ = [
+    "TEMPLATE_DIR",
+    "Quantity",
+    "ModelSpec",
+    "Variable",
+    "Unknown",
+    "VariableTable",
+    "build_table",
+    "spec_from_plant",
+    "trivial_spec",
+    "parse_unit",
+    "derivative_unit",
+    "is_structured_name",
+]
+
+TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
+STEP_NAME = "internal_step"
+
+# Names of the FMI variables that the table itself chooses.
+_STRUCTURED = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?)*")
+
+
+def is_structured_name(name: str) -> bool:
+    """Whether ``name`` is a plain identifier path of the FMI "structured" naming convention."""
+    return _STRUCTURED.fullmatch(name) is not None
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One scalar of a model vector: FMI name, unit (``""`` for none) and description."""
+
+    name: str
+    unit: str
+    description: str
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What an FMU is built from.
+
+    ``ode(x, u, p) -> xdot`` and ``out(x, u, p) -> y`` are CasADi Functions;
+    ``states``, ``inputs``, ``params`` and ``outputs`` name every entry of x,
+    u, p and y. ``output_state[k]`` is the index of the state that output k
+    equals (such outputs are exposed as the state variable itself), or -1.
+    ``step`` is the default internal step of the co-simulation integrator.
+    """
+
+    model_identifier: str
+    model_name: str
+    description: str
+    ode: ca.Function
+    out: ca.Function
+    states: tuple[Quantity, ...]
+    x_start: np.ndarray
+    inputs: tuple[Quantity, ...]
+    params: tuple[Quantity, ...]
+    p_start: np.ndarray
+    p_tunable: tuple[bool, ...]
+    p_min: tuple[float | None, ...]
+    p_max: tuple[float | None, ...]
+    outputs: tuple[Quantity, ...]
+    output_state: tuple[int, ...]
+    step: float
+    stop_time: float = 3.0
+    robot: str = ""        # built-in name or TOML path, recorded for validation
+    motor_model: str = ""
+
+    def __post_init__(self) -> None:
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
+            raise ValueError(f"model_identifier: expected a C identifier, got {self.model_identifier!r}")
+        nx, nu, np_, ny = len(self.states), len(self.inputs), len(self.params), len(self.outputs)
+        expected = {"ode inputs": [nx, nu, np_], "out inputs": [nx, nu, np_]}
+        got = {"ode inputs": [self.ode.numel_in(i) for i in range(3)],
+               "out inputs": [self.out.numel_in(i) for i in range(3)]}
+        for key in expected:
+            if got[key] != expected[key]:
+                raise ValueError(f"{key}: expected sizes (x, u, p) = {expected[key]}, got {got[key]}")
+        if self.ode.numel_out(0) != nx:
+            raise ValueError(f"ode output: expected {nx} entries, got {self.ode.numel_out(0)}")
+        if self.out.numel_out(0) != ny:
+            raise ValueError(f"out output: expected {ny} entries, got {self.out.numel_out(0)}")
+        for name, arr, n in (("x_start", self.x_start, nx), ("p_start", self.p_start, np_)):
+            if np.shape(arr) != (n,) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name}: expected {n} finite values, got {np.asarray(arr).tolist()}")
+        if len(self.p_tunable) != np_ or len(self.p_min) != np_ or len(self.p_max) != np_:
+            raise ValueError(f"p_tunable, p_min, p_max: expected {np_} entries each")
+        for i, q in enumerate(self.params):
+            lo, hi, v = self.p_min[i], self.p_max[i], float(self.p_start[i])
+            if (lo is not None and v < lo) or (hi is not None and v > hi):
+                raise ValueError(f"p_start: parameter {q.name} = {v} is outside its range [{lo}, {hi}]")
+        if len(self.output_state) != ny or any(not -1 <= k < nx for k in self.output_state):
+            raise ValueError(f"output_state: expected {ny} state indices in [-1, {nx - 1}], got {self.output_state}")
+        if not (math.isfinite(self.step) and self.step > 0):
+            raise ValueError(f"step: expected a positive internal step in s, got {self.step!r}")
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One FMI ScalarVariable; ``vr`` is also its row in the table (XML index vr + 1)."""
+
+    name: str
+    vr: int
+    kind: str            # state, derivative, input, parameter, output, step
+    index: int           # position in x, xdot, u, p or y
+    causality: str
+    variability: str
+    initial: str | None
+    start: float | None
+    unit: str
+    description: str
+    settable: str        # never, initial, tunable, input (see fmu/c/model.h)
+    min: float | None = None
+    max: float | None = None
+    derivative_of: int | None = None  # vr of the state this is the derivative of
+
+    @property
+    def xml_index(self) -> int:
+        return self.vr + 1
+
+
+@dataclass(frozen=True)
+class Unknown:
+    """A ModelStructure entry: the variable and the XML indices it depends on."""
+
+    vr: int
+    dependencies: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class VariableTable:
+    """Every FMI variable of one model and its ModelStructure."""
+
+    spec: ModelSpec
+    variables: tuple[Variable, ...]
+    outputs: tuple[Unknown, ...]
+    derivatives: tuple[Unknown, ...]
+    initial_unknowns: tuple[Unknown, ...]
+    units: dict[str, dict[str, int] | None] = field(compare=False)
+
+    def by_kind(self, kind: str) -> tuple[Variable, ...]:
+        return tuple(v for v in self.variables if v.kind == kind)
+
+    def vr(self, name: str) -> int:
+        """Value reference of the variable called ``name``; KeyError names the unknown variable."""
+        for v in self.variables:
+            if v.name == name:
+                return v.vr
+        raise KeyError(f"no FMU variable named {name!r}")
+
+    # ------------------------------------------------------------ rendering
+    def model_description(self, guid: str, source_files: Sequence[str], version: str) -> str:
+        """The text of ``modelDescription.xml``."""
+        spec = self.spec
+        files = "\n".join(f'      <File name={quoteattr(f)}/>' for f in source_files)
+        values = {
+            "model_name": quoteattr(spec.model_name),
+            "model_identifier": quoteattr(spec.model_identifier),
+            "guid": quoteattr(guid),
+            "description": quoteattr(spec.description),
+            "generation_tool": quoteattr(f"manipulator-workbench {version}"),
+            "source_files": files,
+            "unit_definitions": self._unit_definitions(),
+            "stop_time": _xml_number(spec.stop_time),
+            "step_size": _xml_number(spec.step),
+            "vendor_annotations": self._vendor_annotations(),
+            "model_variables": "\n".join(self._scalar_variable(v) for v in self.variables),
+            "outputs": _unknowns_xml("Outputs", self.outputs),
+            "derivatives": _unknowns_xml("Derivatives", self.derivatives),
+            "initial_unknowns": _unknowns_xml("InitialUnknowns", self.initial_unknowns),
+        }
+        return _template("modelDescription.xml").substitute(values)
+
+    def model_data_h(self, guid: str) -> str:
+        """The text of ``model_data.h``: sizes, GUID and one value-reference macro per variable."""
+        spec = self.spec
+        macros = "\n".join(f"#define MW_VR_{_c_identifier(v.name)} {v.vr}u /* {v.name} */" for v in self.variables)
+        return _template("model_data.h").substitute(
+            model_identifier=spec.model_identifier,
+            guid=_c_string(guid),
+            model_identifier_string=_c_string(spec.model_identifier),
+            nx=len(spec.states), nu=len(spec.inputs), np=len(spec.params), ny=len(spec.outputs),
+            nvars=len(self.variables),
+            value_references=macros,
+        )
+
+    def model_data_c(self, casadi_header: str) -> str:
+        """The text of ``model_data.c``: the variable table and start values behind ``mw_model()``."""
+        spec = self.spec
+        kinds = {"state": "MW_KIND_STATE", "derivative": "MW_KIND_DERIVATIVE", "input": "MW_KIND_INPUT",
+                 "parameter": "MW_KIND_PARAMETER", "output": "MW_KIND_OUTPUT", "step": "MW_KIND_STEP"}
+        settable = {"never": "MW_SET_NEVER", "initial": "MW_SET_INITIAL", "tunable": "MW_SET_TUNABLE",
+                    "input": "MW_SET_INPUT"}
+        rows = []
+        for v in self.variables:
+            lo = "-HUGE_VAL" if v.min is None else _c_number(v.min)
+            hi = "HUGE_VAL" if v.max is None else _c_number(v.max)
+            rows.append(f"    {{{_c_string(v.name)}, {kinds[v.kind]}, {settable[v.settable]}, {v.index}u, {lo}, {hi}}},")
+        fid = spec.model_identifier
+        return _template("model_data.c").substitute(
+            casadi_header=casadi_header,
+            variable_rows="\n".join(rows),
+            x_start=_c_array(spec.x_start),
+            x_nominal=_c_array(np.ones(len(spec.states))),
+            u_start=_c_array(np.zeros(len(spec.inputs))),
+            p_start=_c_array(spec.p_start),
+            step_start=_c_number(spec.step),
+            ode=f"{fid}_ode", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
+        )
+
+    def _robot_annotation_attrs(self) -> str:
+        spec = self.spec
+        return f"name={quoteattr(spec.robot)} motorModel={quoteattr(spec.motor_model)}"
+
+    def _vendor_annotations(self) -> str:
+        if not self.spec.robot:
+            return ""
+        return ("  <VendorAnnotations>\n"
+                "    <Tool name=\"manipulator-workbench\">\n"
+                f"      <Robot {self._robot_annotation_attrs()}/>\n"
+                "    </Tool>\n"
+                "  </VendorAnnotations>\n")
+
+    def _scalar_variable(self, v: Variable) -> str:
+        attrs = [f"name={quoteattr(v.name)}", f'valueReference="{v.vr}"']
+        if v.description:
+            attrs.append(f"description={quoteattr(v.description)}")
+        attrs += [f'causality="{v.causality}"', f'variability="{v.variability}"']
+        if v.initial is not None:
+            attrs.append(f'initial="{v.initial}"')
+        real = []
+        if v.unit:
+            real.append(f"unit={quoteattr(v.unit)}")
+        if v.derivative_of is not None:
+            real.append(f'derivative="{v.derivative_of + 1}"')
+        if v.start is not None:
+            real.append(f'start="{_xml_number(v.start)}"')
+        if v.min is not None:
+            real.append(f'min="{_xml_number(v.min)}"')
+        if v.max is not None:
+            real.append(f'max="{_xml_number(v.max)}"')
+        return (f"    <!-- vr {v.vr}, index {v.xml_index} -->\n"
+                f"    <ScalarVariable {' '.join(attrs)}>\n"
+                f"      <Real {' '.join(real)}/>\n"
+                f"    </ScalarVariable>")
+
+    def _unit_definitions(self) -> str:
+        lines = []
+        for name in sorted(self.units):
+            exps = self.units[name]
+            if exps is None:
+                lines.append(f"    <Unit name={quoteattr(name)}/>")
+            else:
+                base = " ".join(f'{k}="{e}"' for k, e in sorted(exps.items()) if e != 0)
+                lines.append(f"    <Unit name={quoteattr(name)}>\n      <BaseUnit {base}/>\n    </Unit>".replace("<BaseUnit />", "<BaseUnit/>"))
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------- units
+
+_BASE_UNITS: dict[str, dict[str, int]] = {
+    "kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "A": {"A": 1}, "K": {"K": 1},
+    "mol": {"mol": 1}, "cd": {"cd": 1}, "rad": {"rad": 1},
+    "N": {"kg": 1, "m": 1, "s": -2}, "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3},
+}
+
+
+def parse_unit(text: str) -> dict[str, int] | None:
+    """SI base-unit exponents of a unit such as ``"N m s/rad"``, ``"kg.m2"`` or ``"m/s^2"``; None if unknown.
+
+    Factors are separated by spaces, ``.`` or ``*``; an exponent follows its
+    symbol with or without ``^``; one ``/`` divides by every factor after it.
+    """
+    text = text.strip().replace("^", "").replace("*", ".")
+    if text in ("", "1", "-"):
+        return {}
+    num, _, den = text.partition("/")
+    if "/" in den:
+        return None
+    exps: dict[str, int] = {}
+    for part, sign in ((num, 1), (den, -1)):
+        for token in re.split(r"[.\s]+", part.strip()):
+            if token in ("", "1"):
+                continue
+            m = re.fullmatch(r"([A-Za-z]+)(-?\d+)?", token)
+            if m is None or m.group(1) not in _BASE_UNITS:
+                return None
+            power = sign * int(m.group(2) or 1)
+            for base, e in _BASE_UNITS[m.group(1)].items():
+                exps[base] = exps.get(base, 0) + power * e
+    return exps
+
+
+def derivative_unit(unit: str) -> str:
+    """The unit of the time derivative: ``rad -> rad/s``, ``m/s -> m/s2``, ``m/s2 -> m/s3``."""
+    if not unit:
+        return "1/s"
+    m = re.fullmatch(r"(.*)/s(\d*)", unit)
+    if m is not None:
+        return f"{m.group(1)}/s{int(m.group(2) or 1) + 1}"
+    if "/" in unit:
+        return f"{unit}.s-1"
+    return f"{unit}/s"
+
+
+# ---------------------------------------------------------------------- table
+
+def build_table(spec: ModelSpec) -> VariableTable:
+    """Value references, attributes and the ModelStructure of ``spec``."""
+    nx, nu, np_, ny = len(spec.states), len(spec.inputs), len(spec.params), len(spec.outputs)
+    state_is_output = {k for k in spec.output_state if k >= 0}
+    variables: list[Variable] = []
+
+    def add(**kw: Any) -> Variable:
+        v = Variable(vr=len(variables), **kw)
+        variables.append(v)
+        return v
+
+    states = [add(name=q.name, kind="state", index=i, causality="output" if i in state_is_output else "local",
+                  variability="continuous", initial="exact", start=float(spec.x_start[i]), unit=q.unit,
+                  description=q.description, settable="initial")
+              for i, q in enumerate(spec.states)]
+    derivs = [add(name=f"der({q.name})", kind="derivative", index=i, causality="local", variability="continuous",
+                  initial="calculated", start=None, unit=derivative_unit(q.unit),
+                  description=f"time derivative of {q.name}", settable="never", derivative_of=states[i].vr)
+              for i, q in enumerate(spec.states)]
+    inputs = [add(name=q.name, kind="input", index=i, causality="input", variability="continuous", initial=None,
+                  start=0.0, unit=q.unit, description=q.description, settable="input")
+              for i, q in enumerate(spec.inputs)]
+    outputs = [add(name=q.name, kind="output", index=k, causality="output", variability="continuous",
+                   initial="calculated", start=None, unit=q.unit, description=q.description, settable="never")
+               for k, q in enumerate(spec.outputs) if spec.output_state[k] < 0]
+    params = [add(name=q.name, kind="parameter", index=i, causality="parameter",
+                  variability="tunable" if spec.p_tunable[i] else "fixed", initial="exact",
+                  start=float(spec.p_start[i]), unit=q.unit, description=q.description,
+                  settable="tunable" if spec.p_tunable[i] else "initial", min=spec.p_min[i], max=spec.p_max[i])
+              for i, q in enumerate(spec.params)]
+    add(name=STEP_NAME, kind="step", index=0, causality="parameter", variability="fixed", initial="exact",
+        start=float(spec.step), unit="s", min=1e-9, settable="initial",
+        description="step of the co-simulation integrator (classical RK4): a communication step h "
+                    "takes ceil(h / internal_step) equal sub-steps")
+
+    names = [v.name for v in variables]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise ValueError(f"variable names: expected unique names, got duplicates {duplicates}")
+    bad = [n for n in names if not is_structured_name(n.removeprefix("der(").removesuffix(")"))]
+    if bad:
+        raise ValueError(f"variable names: expected structured FMI names such as 'q[1]', got {bad}")
+    c_names = [_c_identifier(n) for n in names]
+    if len(set(c_names)) != len(c_names):
+        raise ValueError("variable names: two names map to the same C identifier")
+
+    # Exact structural dependencies from the CasADi Jacobian sparsity.
+    def deps(f: ca.Function, row: int, with_params: bool) -> tuple[int, ...]:
+        groups = [(0, states), (1, inputs)] + ([(2, params)] if with_params else [])
+        found: list[int] = []
+        for iind, known in groups:
+            sp = f.jac_sparsity(0, iind)
+            cols = [c for c in range(sp.size2()) if sp.has_nz(row, c)]
+            found += [known[c].xml_index for c in cols]
+        return tuple(sorted(found))
+
+    out_unknowns = []
+    for v in sorted([*states, *outputs], key=lambda v: v.vr):
+        if v.causality != "output":
+            continue
+        if v.kind == "state":
+            out_unknowns.append(Unknown(v.vr, (v.xml_index,)))
+        else:
+            out_unknowns.append(Unknown(v.vr, deps(spec.out, v.index, with_params=False)))
+    der_unknowns = [Unknown(d.vr, deps(spec.ode, d.index, with_params=False)) for d in derivs]
+    initial = [Unknown(v.vr, deps(spec.ode if v.kind == "derivative" else spec.out, v.index, with_params=True))
+               for v in sorted([*derivs, *outputs], key=lambda v: v.vr)]
+
+    units: dict[str, dict[str, int] | None] = {}
+    for v in variables:
+        if v.unit:
+            units[v.unit] = parse_unit(v.unit)
+    return VariableTable(spec, tuple(variables), tuple(out_unknowns), tuple(der_unknowns), tuple(initial), units)
+
+
+# ------------------------------------------------------------ specifications
+
+def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str | None = None,
+                    robot_ref: str | None = None) -> ModelSpec:
+    """The :class:`ModelSpec` of a robot's plant (``model.plant.build_plant``).
+
+    States ``q[i]`` and ``qd[i]`` (also outputs), inputs the motor torques
+    ``tau_m[i]``, outputs the motor positions and the tool pose, parameters
+    the payload and friction (tunable) and gravity (fixed). ``robot_ref``
+    (default the robot's name) is how :func:`model.load_robot` finds the
+    robot again; it is recorded in the FMU's VendorAnnotations.
+    """
+    n = int(plant.n)
+    names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
+    kinds = ["revolute" if lk.is_revolute else "prismatic" for lk in robot.description.links]
+    out_names = list(plant.output_names)
+    out_units = list(plant.output_units)
+    if len(out_names) != 3 * n + 6:
+        raise ValueError(f"plant.output_names: expected 3n + 6 = {3 * n + 6} outputs [q, qd, G q, tool position, "
+                         f"tool orientation], got {len(out_names)}")
+    out_desc = getattr(plant, "output_descriptions", None)
+
+    def out_name(k: int, fallback: str) -> str:
+        return out_names[k] if is_structured_name(out_names[k]) else fallback
+
+    states = tuple(
+        [Quantity(f"q[{i + 1}]", out_units[i], f"joint {i + 1} ({names[i]}, {kinds[i]}) position") for i in range(n)]
+        + [Quantity(f"qd[{i + 1}]", out_units[n + i], f"joint {i + 1} ({names[i]}, {kinds[i]}) velocity")
+           for i in range(n)])
+    inputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque of joint {i + 1} ({names[i]}), motor side")
+                   for i in range(n))
+    outputs: list[Quantity] = list(states)
+    for i in range(n):
+        k = 2 * n + i
+        outputs.append(Quantity(out_name(k, f"q_m[{i + 1}]"), out_units[k],
+                                out_desc[k] if out_desc else f"motor {i + 1} ({names[i]}) position, G q"))
+    for j, axis in enumerate("xyz"):
+        k = 3 * n + j
+        outputs.append(Quantity(out_name(k, f"p_tool[{j + 1}]"), out_units[k],
+                                out_desc[k] if out_desc else f"tool position {axis} in the base frame"))
+    angles = ("roll", "pitch", "yaw")
+    for j in range(3):
+        k = 3 * n + 3 + j
+        if out_desc:
+            text = out_desc[k]
+        elif "rpy" in out_names[k]:
+            text = f"tool {angles[j]} in the base frame, ZYX angles: R_0n = Rz(yaw) Ry(pitch) Rx(roll)"
+        else:
+            text = f"tool orientation angle {j + 1} in the base frame"
+        outputs.append(Quantity(out_name(k, f"tool_orientation[{j + 1}]"), out_units[k], text))
+    params = tuple(Quantity(nm, u, d) for nm, u, d in
+                   zip(plant.param_names, plant.param_units, plant.param_descriptions))
+    tunable = tuple(not nm.startswith("gravity") for nm in plant.param_names)
+    # physical signs (model.dynamics.parameters): masses and dissipation >= 0, Tc- <= 0
+    nonneg = ("payload_mass", "viscous_friction", "coulomb_friction_pos")
+    p_min = tuple(0.0 if nm.split("[")[0] in nonneg else None for nm in plant.param_names)
+    p_max = tuple(0.0 if nm.split("[")[0] == "coulomb_friction_neg" else None for nm in plant.param_names)
+    ode, out = plant.ode, plant.out
+    if ode.is_a("MXFunction"):
+        ode = ode.expand()
+    if out.is_a("MXFunction"):
+        out = out.expand()
+    # the first 2n outputs are exposed as the states themselves: check they are [q; qd]
+    x_probe = np.random.default_rng(0).standard_normal(2 * n)
+    y_probe = np.asarray(out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
+    if not np.array_equal(y_probe[:2 * n], x_probe):
+        raise ValueError("plant.out: expected the first 2n outputs to be the state [q; qd] itself")
+    identifier = model_identifier or re.sub(r"\W", "_", robot.name)
+    if identifier[0].isdigit():
+        identifier = "m_" + identifier
+    return ModelSpec(
+        model_identifier=identifier,
+        model_name=robot.name,
+        description=(f"{robot.description.description or robot.name}: rigid-body dynamics with motors "
+                     f"({robot.motor_model} motor model) and friction; inputs motor torques"),
+        ode=ode, out=out,
+        states=states, x_start=np.asarray(plant.x0, dtype=float),
+        inputs=inputs,
+        params=params, p_start=np.asarray(plant.param_defaults, dtype=float), p_tunable=tunable, p_min=p_min,
+        p_max=p_max, outputs=tuple(outputs), output_state=tuple(list(range(2 * n)) + [-1] * (n + 6)),
+        step=float(step),
+        robot=robot_ref or robot.name,
+        motor_model=robot.motor_model,
+    )
+
+
+def trivial_spec(step: float = 1e-3, n_inputs: int = 1) -> ModelSpec:
+    """A one-state lag ``xdot = rate (u_1 + ... + u_m - x), y = x``: the yardstick of an importer's own cost.
+
+    ``n_inputs`` lets a benchmark give it as many inputs as the model it is
+    compared with, so that setting the inputs costs the importer the same.
+    """
+    if n_inputs < 1:
+        raise ValueError(f"n_inputs: expected at least 1 input, got {n_inputs}")
+    x, u, p = ca.SX.sym("x", 1), ca.SX.sym("u", n_inputs), ca.SX.sym("p", 1)
+    ode = ca.Function("ode", [x, u, p], [p * (ca.sum1(u) - x)], ["x", "u", "p"], ["xdot"])
+    out = ca.Function("out", [x, u, p], [x], ["x", "u", "p"], ["y"])
+    names = ["u"] if n_inputs == 1 else [f"u[{i}]" for i in range(1, n_inputs + 1)]
+    state = Quantity("x", "", "state, also the output")
+    return ModelSpec(
+        model_identifier="trivial",
+        model_name="trivial",
+        description="first-order lag xdot = rate (sum of the inputs - x): the trivial FMU of the benchmarks",
+        ode=ode, out=out,
+        states=(state,), x_start=np.zeros(1),
+        inputs=tuple(Quantity(nm, "", "input") for nm in names),
+        params=(Quantity("rate", "1/s", "inverse time constant"),), p_start=np.ones(1),
+        p_tunable=(True,), p_min=(0.0,), p_max=(None,),
+        outputs=(state,), output_state=(0,),
+        step=float(step),
+    )
+
+
+# ------------------------------------------------------------------- helpers
+
+def _template(name: str) -> string.Template:
+    return string.Template((TEMPLATE_DIR / name).read_text())
+
+
+def _xml_number(x: float) -> str:
+    x = float(x)
+    if not math.isfinite(x):
+        raise ValueError(f"expected a finite number for modelDescription.xml, got {x!r}")
+    return repr(x)
+
+
+def _c_number(x: float) -> str:
+    text = _xml_number(x)
+    return text if any(ch in text for ch in ".e") else text + ".0"
+
+
+def _c_array(values: Any) -> str:
+    vals = [float(v) for v in np.asarray(values, dtype=float).reshape(-1)]
+    if not vals:
+        return "{0.0}"
+    return "{" + ", ".join(_c_number(v) for v in vals) + "}"
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _c_identifier(name: str) -> str:
+    ident = re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_")
+    return ident
+
+
+def _unknowns_xml(tag: str, unknowns: Sequence[Unknown]) -> str:
+    """One ModelStructure element, or nothing when it has no Unknown (the schema forbids it empty: nx = 0)."""
+    if not unknowns:
+        return ""
+    lines = [f"    <{tag}>"]
+    for u in unknowns:
+        deps = " ".join(str(d) for d in u.dependencies)
+        lines.append(f'      <Unknown index="{u.vr + 1}" dependencies="{deps}"/>')
+    lines.append(f"    </{tag}>\n")
+    return "\n".join(lines)
+

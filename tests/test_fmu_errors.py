@@ -1,0 +1,502 @@
+"""Robustness of the FMI wrapper: every bad call returns fmi2Error or fmi2Discard with a message.
+
+Driven at the C-API level through FMPy's low-level ``FMU2Slave`` / ``FMU2Model``
+with a logger that records every message; one test per bad-call case.
+"""
+
+from __future__ import annotations
+
+from ctypes import byref, c_double, c_int, c_size_t, c_void_p, create_string_buffer
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (fmi2CoSimulation, fmi2Discard, fmi2DoStepStatus, fmi2Error, fmi2EventInfo, fmi2FMUstate,
+                       fmi2LastSuccessfulTime, fmi2OK, fmi2Real, fmi2Status,
+                       fmi2ValueReference, fmi2Warning)
+
+from fmu_support import Harness, LogRecorder, make_callbacks
+
+TAU = ["tau_m[1]", "tau_m[2]", "tau_m[3]", "tau_m[4]"]
+
+
+@pytest.fixture
+def cs():
+    h = Harness("cs").start()
+    yield h
+    h.close()
+
+
+@pytest.fixture
+def cs_fresh():
+    h = Harness("cs").start(initialise=False)
+    yield h
+    h.close()
+
+
+@pytest.fixture
+def me():
+    h = Harness("me").start()
+    h.fmu.enterContinuousTimeMode()
+    yield h
+    h.close()
+
+
+def status_of(call, *args, **kwargs) -> int:
+    """The status of an FMPy call that may raise FMICallException."""
+    try:
+        result = call(*args, **kwargs)
+    except FMICallException as exc:
+        return exc.status
+    return fmi2OK if result is None else int(result)
+
+
+def last(h: Harness) -> tuple[int, str, str]:
+    assert h.log.messages, "the FMU logged nothing"
+    return h.log.messages[-1]
+
+
+def assert_logged(h: Harness, status: int, category: str, *fragments: str) -> None:
+    got_status, got_category, message = last(h)
+    assert (got_status, got_category) == (status, category), message
+    for fragment in fragments:
+        assert fragment in message, message
+
+
+# -------------------------------------------------------------- instantiation
+
+def _instantiate(h: Harness, guid: bytes | None, callbacks=None, name: bytes = b"x", kind: int = fmi2CoSimulation):
+    cb = h.callbacks if callbacks is None else callbacks
+    return h.fmu.fmi2Instantiate(name, kind, guid, b"file:///tmp", byref(cb) if cb is not False else None, 0, 0)
+
+
+def test_wrong_guid_is_refused_with_a_message():
+    h = Harness("cs")
+    try:
+        assert _instantiate(h, b"{00000000-0000-0000-0000-000000000000}") is None
+        assert_logged(h, fmi2Error, "logStatusError", "fmi2Instantiate: wrong GUID")
+    finally:
+        h.close()
+
+
+def test_null_guid_is_refused():
+    h = Harness("cs")
+    try:
+        assert _instantiate(h, None) is None
+        assert_logged(h, fmi2Error, "logStatusError", "wrong GUID")
+    finally:
+        h.close()
+
+
+def test_null_callbacks_return_null_without_crashing():
+    h = Harness("cs")
+    try:
+        assert _instantiate(h, h.md.guid.encode(), callbacks=False) is None
+    finally:
+        h.close()
+
+
+def test_missing_memory_callbacks_are_refused():
+    h = Harness("cs")
+    log = LogRecorder()
+    callbacks = make_callbacks(log, with_memory=False)
+    try:
+        assert _instantiate(h, h.md.guid.encode(), callbacks=callbacks) is None
+        assert "allocateMemory and freeMemory are required" in log.text()
+    finally:
+        h.close()
+
+
+def test_empty_instance_name_is_refused():
+    h = Harness("cs")
+    try:
+        assert _instantiate(h, h.md.guid.encode(), name=b"") is None
+        assert_logged(h, fmi2Error, "logStatusError", "instanceName is NULL or empty")
+    finally:
+        h.close()
+
+
+def test_unknown_fmu_type_is_refused():
+    h = Harness("cs")
+    try:
+        assert _instantiate(h, h.md.guid.encode(), kind=7) is None
+        assert_logged(h, fmi2Error, "logStatusError", "neither fmi2ModelExchange nor fmi2CoSimulation")
+    finally:
+        h.close()
+
+
+def test_null_component_is_an_error_not_a_crash():
+    h = Harness("cs")
+    try:
+        assert h.fmu.dll.fmi2DoStep(None, c_double(0.0), c_double(1e-3), c_int(1)) == fmi2Error
+        assert h.fmu.dll.fmi2GetReal(None, None, c_size_t(0), None) == fmi2Error
+        h.fmu.dll.fmi2FreeInstance(None)
+    finally:
+        h.close()
+
+
+def test_a_foreign_pointer_is_not_taken_for_an_instance():
+    h = Harness("cs")
+    try:
+        junk = create_string_buffer(512)
+        assert h.fmu.dll.fmi2Terminate(junk) == fmi2Error
+    finally:
+        h.close()
+
+
+# ------------------------------------------------------------- call sequence
+
+def test_do_step_before_initialisation(cs_fresh):
+    assert status_of(cs_fresh.fmu.doStep, 0.0, 1e-3) == fmi2Error
+    assert_logged(cs_fresh, fmi2Error, "logStatusError", "fmi2DoStep: illegal call sequence",
+                  'not allowed in mode "instantiated"')
+
+
+def test_exit_initialisation_without_enter(cs_fresh):
+    assert status_of(cs_fresh.fmu.exitInitializationMode) == fmi2Error
+    assert_logged(cs_fresh, fmi2Error, "logStatusError", "fmi2ExitInitializationMode: illegal call sequence")
+
+
+def test_setup_experiment_after_initialisation(cs):
+    assert status_of(cs.fmu.setupExperiment, startTime=1.0) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2SetupExperiment: illegal call sequence",
+                  '"step complete"')
+
+
+def test_calls_after_an_error_are_refused_until_reset(cs):
+    assert status_of(cs.fmu.doStep, 0.0, 0.0) == fmi2Error
+    assert status_of(cs.fmu.doStep, 0.0, 1e-3) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", 'not allowed in mode "error"')
+    assert len(cs.fmu.getReal(cs.vr("q[1]"))) == 1            # getters stay legal in the error mode
+
+
+def test_reset_after_an_error_gives_a_fresh_instance(cs):
+    cs.fmu.setReal(cs.vr(*TAU), [0.1, 0.1, 0.0, 0.0])
+    cs.fmu.doStep(0.0, 1e-3)
+    assert status_of(cs.fmu.doStep, 0.0, 1e-3) == fmi2Error    # wrong communication point
+    cs.fmu.reset()
+    cs.fmu.setupExperiment(startTime=0.0)
+    cs.fmu.enterInitializationMode()
+    cs.fmu.exitInitializationMode()
+    assert cs.fmu.getReal(cs.vr("q[1]", "tau_m[1]")) == [0.0, 0.0]
+    cs.fmu.doStep(0.0, 1e-3)
+
+
+def test_model_exchange_function_on_a_co_simulation_instance(cs):
+    assert cs.fmu.dll.fmi2SetTime(c_void_p(cs.c), c_double(1.0)) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2SetTime: this function belongs to Model Exchange")
+
+
+def test_co_simulation_function_on_a_model_exchange_instance(me):
+    assert me.fmu.dll.fmi2DoStep(c_void_p(me.c), c_double(0.0), c_double(1e-3), c_int(1)) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2DoStep: this function belongs to Co-Simulation")
+
+
+def test_new_discrete_states_outside_event_mode(me):
+    info = fmi2EventInfo()
+    assert status_of(me.fmu.fmi2NewDiscreteStates, me.c, byref(info)) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2NewDiscreteStates: illegal call sequence",
+                  '"continuous-time mode"')
+
+
+# ----------------------------------------------------------- value references
+
+def test_unknown_value_reference_in_get_real(cs):
+    assert status_of(cs.fmu.getReal, [0, 999]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2GetReal: unknown value reference 999")
+
+
+def test_unknown_value_reference_in_set_real(cs):
+    assert status_of(cs.fmu.setReal, [12345], [1.0]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2SetReal: unknown value reference 12345")
+
+
+def test_there_are_no_integer_variables(cs):
+    assert status_of(cs.fmu.getInteger, [0]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "the model has no Integer variables")
+
+
+def test_null_value_reference_array(cs):
+    values = (fmi2Real * 2)()
+    assert status_of(cs.fmu.fmi2SetReal, cs.c, None, 2, values) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2SetReal: argument vr[] is NULL")
+
+
+def test_null_value_array(cs):
+    vr = (fmi2ValueReference * 2)(0, 1)
+    assert status_of(cs.fmu.fmi2GetReal, cs.c, vr, 2, None) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2GetReal: argument value[] is NULL")
+
+
+def test_zero_length_calls_need_no_arrays(cs):
+    assert status_of(cs.fmu.fmi2GetReal, cs.c, None, 0, None) == fmi2OK
+    assert status_of(cs.fmu.fmi2SetReal, cs.c, None, 0, None) == fmi2OK
+
+
+# ------------------------------------------------------------------- values
+
+def test_nan_input_is_rejected_and_the_input_kept(cs):
+    cs.fmu.setReal(cs.vr("tau_m[1]"), [0.5])
+    assert status_of(cs.fmu.setReal, cs.vr("tau_m[1]", "tau_m[2]"), [0.25, float("nan")]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2SetReal: variable tau_m[2]: value nan is not finite")
+    assert cs.fmu.getReal(cs.vr("tau_m[1]")) == [0.5]         # a rejected call changes nothing
+
+
+def test_infinite_input_is_rejected(cs):
+    assert status_of(cs.fmu.setReal, cs.vr("tau_m[3]"), [float("-inf")]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "variable tau_m[3]: value -inf is not finite")
+
+
+def test_parameter_out_of_range(cs):
+    assert status_of(cs.fmu.setReal, cs.vr("payload_mass"), [-1.0]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "variable payload_mass: value -1 is outside [0, inf]")
+
+
+def test_setting_a_calculated_output(cs):
+    assert status_of(cs.fmu.setReal, cs.vr("tool_position[1]"), [1.0]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "tool_position[1] is calculated by the model and cannot be set")
+
+
+def test_fixed_parameter_after_initialisation(cs):
+    assert status_of(cs.fmu.setReal, cs.vr("gravity[3]"), [-1.62]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError",
+                  "variable gravity[3] is fixed: it can only be set before fmi2ExitInitializationMode")
+
+
+def test_internal_step_after_initialisation(cs):
+    assert status_of(cs.fmu.setReal, cs.vr("internal_step"), [1e-4]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "variable internal_step is fixed")
+
+
+def test_state_start_value_after_initialisation(cs):
+    assert status_of(cs.fmu.setReal, cs.vr("q[1]"), [0.3]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "variable q[1] is fixed")
+
+
+def test_tunable_parameter_in_continuous_time_mode(me):
+    assert status_of(me.fmu.setReal, me.vr("payload_mass"), [2.0]) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "variable payload_mass is a tunable parameter",
+                  '"continuous-time mode"')
+
+
+def test_tunable_parameter_between_steps_is_accepted(cs):
+    cs.fmu.doStep(0.0, 1e-3)
+    cs.fmu.setReal(cs.vr("payload_mass", "viscous_friction[2]"), [3.0, 2e-3])
+    cs.fmu.doStep(1e-3, 1e-3)
+    assert cs.fmu.getReal(cs.vr("payload_mass")) == [3.0]
+    assert not any(status >= fmi2Warning for status, _, _ in cs.log.messages)
+
+
+# ------------------------------------------------------------------ stepping
+
+def test_zero_communication_step(cs):
+    assert status_of(cs.fmu.doStep, 0.0, 0.0) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2DoStep: communicationStepSize 0 must be positive and finite")
+
+
+def test_negative_communication_step(cs):
+    assert status_of(cs.fmu.doStep, 0.0, -1e-3) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "communicationStepSize -0.001 must be positive and finite")
+
+
+def test_non_finite_communication_step(cs):
+    assert status_of(cs.fmu.doStep, 0.0, float("nan")) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "communicationStepSize nan must be positive and finite")
+
+
+def test_communication_point_that_is_not_the_fmu_time(cs):
+    cs.fmu.doStep(0.0, 1e-3)
+    assert status_of(cs.fmu.doStep, 0.5, 1e-3) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "currentCommunicationPoint 0.5 differs from the FMU time 0.001")
+
+
+def test_state_that_becomes_non_finite_is_discarded_and_the_last_good_state_kept(cs):
+    cs.fmu.setReal(cs.vr(*TAU), [0.01, 0.0, 0.0, 0.0])
+    cs.fmu.doStep(0.0, 1e-3)
+    good = cs.states()
+    cs.fmu.setReal(cs.vr(*TAU), [1e308, 0.0, 0.0, 0.0])   # finite, but G u overflows
+    assert status_of(cs.fmu.doStep, 1e-3, 1e-3) == fmi2Discard
+    assert_logged(cs, fmi2Discard, "logStatusDiscard", "fmi2DoStep: the state became non-finite in sub-step 1 of 1",
+                  "the state at the communication point 0.001 is kept")
+    assert cs.states().tobytes() == good.tobytes()
+    assert cs.fmu.getRealStatus(fmi2LastSuccessfulTime) == 1e-3
+
+
+def test_step_after_a_discard_needs_the_state_restored(cs):
+    state = cs.fmu.getFMUstate()
+    cs.fmu.setReal(cs.vr(*TAU), [1e308, 0.0, 0.0, 0.0])
+    assert status_of(cs.fmu.doStep, 0.0, 1e-3) == fmi2Discard
+    assert status_of(cs.fmu.doStep, 0.0, 1e-3) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", 'fmi2DoStep: illegal call sequence, not allowed in mode "step failed"')
+    cs.fmu.setFMUstate(state)                               # back to the saved state and mode
+    cs.fmu.doStep(0.0, 1e-3)
+    cs.fmu.freeFMUstate(state)
+
+
+def test_cancel_step_is_an_error(cs):
+    assert status_of(cs.fmu.cancelStep) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2CancelStep: fmi2DoStep is synchronous")
+
+
+def test_unavailable_status_is_a_discard(cs):
+    value = fmi2Status()
+    assert status_of(cs.fmu.fmi2GetStatus, cs.c, fmi2DoStepStatus, byref(value)) == fmi2Discard
+    assert_logged(cs, fmi2Discard, "logStatusDiscard", "fmi2GetStatus: status kind 0 is not available")
+
+
+def test_input_derivatives_are_not_supported(cs):
+    assert status_of(cs.fmu.setRealInputDerivatives, cs.vr("tau_m[1]"), [1], [1.0]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "canInterpolateInputs")
+
+
+# ---------------------------------------------------------------- FMU state
+
+def test_deserialise_a_buffer_of_the_wrong_size(cs):
+    state = cs.fmu.getFMUstate()
+    data = cs.fmu.serializeFMUstate(state)
+    assert status_of(cs.fmu.deSerializeFMUstate, data[:-1]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError",
+                  f"fmi2DeSerializeFMUstate: {len(data) - 1} bytes rejected: the size does not match")
+    cs.fmu.freeFMUstate(state)
+
+
+def test_deserialise_a_corrupt_header(cs):
+    state = cs.fmu.getFMUstate()
+    data = bytearray(cs.fmu.serializeFMUstate(state))
+    data[0] ^= 0xFF
+    assert status_of(cs.fmu.deSerializeFMUstate, bytes(data)) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "not a serialized FMU state of this wrapper")
+    cs.fmu.freeFMUstate(state)
+
+
+def test_deserialise_the_state_of_another_model(cs):
+    state = cs.fmu.getFMUstate()
+    data = bytearray(cs.fmu.serializeFMUstate(state))
+    data[25] ^= 0x01                                   # inside the recorded GUID
+    assert status_of(cs.fmu.deSerializeFMUstate, bytes(data)) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "the state belongs to another model (GUID differs)")
+    cs.fmu.freeFMUstate(state)
+
+
+def test_deserialise_non_finite_values(cs):
+    state = cs.fmu.getFMUstate()
+    data = bytearray(cs.fmu.serializeFMUstate(state))
+    data[128:136] = np.array([np.nan]).tobytes()
+    assert status_of(cs.fmu.deSerializeFMUstate, bytes(data)) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "the recorded values are not finite")
+    cs.fmu.freeFMUstate(state)
+
+
+def test_serialise_into_a_buffer_of_the_wrong_size(cs):
+    state = cs.fmu.getFMUstate()
+    size = c_size_t()
+    cs.fmu.fmi2SerializedFMUstateSize(cs.c, state, byref(size))
+    buffer = create_string_buffer(size.value)
+    assert status_of(cs.fmu.fmi2SerializeFMUstate, cs.c, state, buffer, size.value + 8) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", f"size {size.value + 8} differs from fmi2SerializedFMUstateSize")
+    cs.fmu.freeFMUstate(state)
+
+
+def test_set_a_null_fmu_state(cs):
+    assert status_of(cs.fmu.fmi2SetFMUstate, cs.c, None) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2SetFMUstate: FMUstate is NULL or not an FMU state")
+
+
+def test_set_a_foreign_fmu_state(cs):
+    junk = create_string_buffer(256)
+    assert status_of(cs.fmu.fmi2SetFMUstate, cs.c, junk) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "not an FMU state of this model")
+
+
+def test_free_fmu_state_with_a_null_pointer(cs):
+    assert status_of(cs.fmu.fmi2FreeFMUstate, cs.c, None) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "fmi2FreeFMUstate: argument FMUstate is NULL")
+
+
+def test_free_of_an_empty_fmu_state_is_a_no_op(cs):
+    empty = fmi2FMUstate()
+    assert status_of(cs.fmu.fmi2FreeFMUstate, cs.c, byref(empty)) == fmi2OK
+
+
+def test_co_simulation_state_into_a_model_exchange_instance(cs, me):
+    state = cs.fmu.getFMUstate()
+    data = cs.fmu.serializeFMUstate(state)
+    assert status_of(me.fmu.deSerializeFMUstate, data) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "the recorded mode is not valid for this instance type")
+    cs.fmu.freeFMUstate(state)
+
+
+# ---------------------------------------------------------- Model Exchange
+
+def test_event_indicators_of_the_wrong_size(me):
+    z = (fmi2Real * 1)()
+    assert status_of(me.fmu.fmi2GetEventIndicators, me.c, z, 1) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2GetEventIndicators: ni is 1, the model has 0")
+
+
+def test_continuous_states_of_the_wrong_size(me):
+    x = (fmi2Real * 3)()
+    assert status_of(me.fmu.fmi2SetContinuousStates, me.c, x, 3) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2SetContinuousStates: nx is 3, the model has 8")
+
+
+def test_non_finite_continuous_states(me):
+    x = (fmi2Real * 8)(*([0.0] * 7 + [float("inf")]))
+    assert status_of(me.fmu.fmi2SetContinuousStates, me.c, x, 8) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "the states are not all finite")
+
+
+def test_non_finite_derivatives_are_a_discard(me):
+    me.fmu.setReal(me.vr("tau_m[2]"), [1e308])
+    dx = (fmi2Real * 8)()
+    assert status_of(me.fmu.fmi2GetDerivatives, me.c, dx, 8) == fmi2Discard
+    assert_logged(me, fmi2Discard, "logStatusDiscard", "fmi2GetDerivatives: the derivatives at t = 0 are not finite")
+
+
+def test_directional_derivative_with_an_output_as_known(me):
+    assert status_of(me.fmu.getDirectionalDerivative, me.vr("der(qd[1])"), me.vr("tool_position[1]"),
+                     [1.0]) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "tool_position[1] cannot be a known")
+
+
+def test_directional_derivative_with_a_nan_seed(me):
+    assert status_of(me.fmu.getDirectionalDerivative, me.vr("der(qd[1])"), me.vr("q[1]"),
+                     [float("nan")]) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "the seed of q[1] is not finite")
+
+
+# ----------------------------------------------------------------- logging
+
+def test_unknown_log_category_is_a_warning(cs):
+    cs.fmu.setDebugLogging(True, ["logCalls", "no%such%category"])
+    status, category, message = last(cs)
+    assert (status, category) == (fmi2Warning, "logStatusWarning")
+    # the message is a printf format for the importer: every '%' is doubled
+    assert 'unknown log category "no%%such%%category", ignored' in message
+
+
+def test_log_calls_category_traces_every_call(cs):
+    cs.fmu.setDebugLogging(True, ["logCalls"])
+    cs.fmu.doStep(0.0, 1e-3)
+    assert (fmi2OK, "logCalls", "fmi2DoStep") in cs.log.messages
+    cs.fmu.setDebugLogging(False, [])
+    count = len(cs.log.messages)
+    cs.fmu.doStep(1e-3, 1e-3)
+    assert len(cs.log.messages) == count
+
+
+def test_errors_can_be_silenced_by_category(cs):
+    cs.fmu.setDebugLogging(False, ["logStatusError"])
+    count = len(cs.log.messages)
+    assert status_of(cs.fmu.getReal, [999]) == fmi2Error
+    assert len(cs.log.messages) == count
+
+
+def test_model_exchange_instance_reports_its_mode_in_messages():
+    h = Harness("me").start(initialise=False)
+    try:
+        assert status_of(h.fmu.enterContinuousTimeMode) == fmi2Error
+        assert_logged(h, fmi2Error, "logStatusError", "fmi2EnterContinuousTimeMode: illegal call sequence",
+                      '"instantiated"')
+    finally:
+        h.close()
