@@ -16,6 +16,7 @@ import numpy as np
 
 import model
 from control_design.commands import register as register_control
+from fmu.commands import register as register_fmu
 from model.description import RobotDescriptionError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -66,6 +67,15 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from .demo import run_demo  # heavy: FMU export, simulations, plots
+
+    if not (args.bandwidth > 0 and args.rate > 0):
+        raise UsageError(f"--bandwidth and --rate: expected positive numbers, got {args.bandwidth!r} and {args.rate!r}")
+    result = run_demo(args.robot, args.out, bandwidth=args.bandwidth, rate_hz=args.rate, gif=not args.no_gif)
+    return 0 if result.fmu_ok else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="manip", description="Model, control and export robot manipulators.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -75,6 +85,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("robot", help="built-in name or TOML file")
     p.set_defaults(func=_cmd_info)
     register_control(sub)
+    register_fmu(sub)
+    p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")
+    p.add_argument("--robot", default="scara", help="built-in name or TOML file (default scara)")
+    p.add_argument("--out", default="out", help="output folder (default out/)")
+    p.add_argument("--bandwidth", type=float, default=50.0, metavar="RAD_S", help="loop bandwidth (default 50 rad/s)")
+    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="control rate (default 1000 Hz)")
+    p.add_argument("--no-gif", action="store_true", help="skip the animation (its slowest step)")
+    p.set_defaults(func=_cmd_demo)
     return parser
 
 
@@ -84,14 +102,17 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``manip`` console command; returns the exit status."""
-    warnings.formatwarning = _one_line_warning
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = warnings.formatwarning
+    warnings.formatwarning = _one_line_warning
     try:
         return int(args.func(args) or 0)
     except (UsageError, RobotDescriptionError, ValueError, FileNotFoundError) as exc:
         print(f"manip {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = previous
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,398 @@
+"""Controller FMUs: the control laws of :mod:`control_design.controllers` as stateless FMI 2.0 FMUs.
+
+A controller FMU is built by the same variable table (:mod:`fmu.variables`) and
+C wrapper (``fmu/c/``) as the plant: a :class:`~fmu.variables.ModelSpec` with no
+states (``nx = 0``) whose output function is the control law,
+``tau_m = out(x, u, p)``, so its outputs depend directly on its inputs
+(direct feedthrough). Inputs are the reference and the measured state,
+parameters the gains and limits (all tunable):
+
+================  ==========================================================
+inputs            ``q_ref[i]``, ``qd_ref[i]`` (``qdd_ref[i]`` for 'pd-ff' and
+                  'ct'), ``q[i]``, ``qd[i]`` (rad or m, /s, /s^2)
+output            ``tau_m[i]``, motor torque, N m
+'pd', 'pd-g',     ``Kp[i]`` (N m/rad), ``Kd[i]`` (N m s/rad), motor side;
+'pd-ff'           ``gear_ratio[i]``; ``tau_m_max[i]`` (N m); 'pd-ff':
+                  ``J_ff_m[i]`` (kg m^2), ``B_ff_m[i]`` (N m s/rad);
+                  'pd-g': the controller model's ``model.*`` parameters
+'ct'              ``Kp[i]`` (1/s^2), ``Kd[i]`` (1/s), ``tau_m_max[i]`` (N m) and
+                  the controller model's ``model.*`` parameters (payload,
+                  friction, gravity); the model itself (Newton-Euler ``rne``)
+                  is generated into the FMU's C
+================  ==========================================================
+
+Each law is written with the same operations, in the same order, as the
+Python controller it mirrors (``DecentralisedController.update`` and
+``ComputedTorqueController.update``), and saturates the same way
+(``min(max(tau_m, -tau_m_max), tau_m_max)``), so the FMU reproduces the Python
+controller to round-off. A controller without saturation gets the largest
+double as its limit (a no-op on finite torques). The PID kind has an
+integrator state and is not exported.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import zipfile
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import casadi as ca
+import numpy as np
+
+from control_design.controllers import ComputedTorqueController, Controller, DecentralisedController
+from control_design.design import RobotDesign
+from control_design.reference import Reference
+from model.robot import Robot
+
+from .build import build_fmu
+from .variables import ModelSpec, Quantity
+
+__all__ = [
+    "CONTROLLER_FMU_KINDS",
+    "NO_LIMIT",
+    "ControllerFmuReport",
+    "controller_spec",
+    "export_controller_fmu",
+    "controller_fmu_kind",
+    "validate_controller_fmu",
+]
+
+#: Controller kinds a controller FMU can carry.
+CONTROLLER_FMU_KINDS: tuple[str, ...] = ("pd", "pd-g", "pd-ff", "ct")
+#: Torque limit (N m) written for a controller without saturation: clipping at it changes no finite torque.
+NO_LIMIT = float(np.finfo(float).max)
+
+_NAME_PATTERN = re.compile(r"^(?P<robot>.+) (?P<kind>pd|pd-g|pd-ff|ct) controller$")
+
+Progress = Callable[[str], None]
+
+
+def _units(robot: Robot) -> tuple[list[str], list[str], list[str]]:
+    links = robot.description.links
+    pos = ["rad" if lk.is_revolute else "m" for lk in links]
+    return pos, [f"{u}/s" for u in pos], [f"{u}/s2" for u in pos]
+
+
+def _model_params(robot: Robot, uses: str) -> tuple[list[Quantity], np.ndarray, list[bool], list[float | None],
+                                                     list[float | None]]:
+    """The controller model's parameter vector ``p`` as FMU parameters ``model.<name>``."""
+    layout = robot.dynamics.layout
+    quantities = [Quantity(f"model.{nm}", unit, f"controller model ({uses}): {text}")
+                  for nm, unit, text in zip(layout.names, layout.units, layout.descriptions)]
+    # the plant FMU's conventions (fmu.variables.spec_from_plant): gravity fixed, physical signs as ranges
+    nonneg = ("payload_mass", "viscous_friction", "coulomb_friction_pos")
+    tunable = [not nm.startswith("gravity") for nm in layout.names]
+    lo: list[float | None] = [0.0 if nm.split("[")[0] in nonneg else None for nm in layout.names]
+    hi: list[float | None] = [0.0 if nm.split("[")[0] == "coulomb_friction_neg" else None for nm in layout.names]
+    return quantities, robot.dynamics.p, tunable, lo, hi
+
+
+def controller_spec(controller: Controller, robot: Robot, *, model_identifier: str | None = None) -> ModelSpec:
+    """The :class:`~fmu.variables.ModelSpec` of a stateless controller FMU reproducing ``controller``.
+
+    Parameters
+    ----------
+    controller
+        A :class:`~control_design.controllers.DecentralisedController` of kind 'pd', 'pd-g' or
+        'pd-ff', or a :class:`~control_design.controllers.ComputedTorqueController`; its gains,
+        gear ratios, limits and model parameters become the FMU's parameter start values, its
+        rate (Hz) the FMU's default communication step ``1 / rate_hz`` (s).
+    robot
+        The robot the controller drives (joint names, units; the model of 'pd-g' and 'ct' is the
+        controller's own).
+    model_identifier
+        C identifier of the FMU (default ``<robot>_<kind>_controller``).
+
+    Raises
+    ------
+    ValueError
+        A PID controller (it has a state), a kind not in :data:`CONTROLLER_FMU_KINDS`, or a joint
+        count that differs from the robot's.
+    """
+    kind = controller.kind
+    if kind not in CONTROLLER_FMU_KINDS:
+        raise ValueError(f"controller: expected a kind in {CONTROLLER_FMU_KINDS} (stateless laws), got {kind!r}")
+    n = robot.n
+    if controller.n != n:
+        raise ValueError(f"controller: expected {n} joints like robot {robot.name!r}, got {controller.n}")
+    pos, vel, acc = _units(robot)
+    names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
+    idx = range(n)
+
+    qr, qdr, qddr = ca.SX.sym("q_ref", n), ca.SX.sym("qd_ref", n), ca.SX.sym("qdd_ref", n)
+    q, qd = ca.SX.sym("q", n), ca.SX.sym("qd", n)
+    uses_qdd = kind in ("pd-ff", "ct")
+    u_parts = [qr, qdr] + ([qddr] if uses_qdd else []) + [q, qd]
+    inputs = ([Quantity(f"q_ref[{i + 1}]", pos[i], f"reference position of joint {i + 1} ({names[i]})") for i in idx]
+              + [Quantity(f"qd_ref[{i + 1}]", vel[i], f"reference velocity of joint {i + 1} ({names[i]})") for i in idx]
+              + ([Quantity(f"qdd_ref[{i + 1}]", acc[i], f"reference acceleration of joint {i + 1} ({names[i]})")
+                  for i in idx] if uses_qdd else [])
+              + [Quantity(f"q[{i + 1}]", pos[i], f"measured position of joint {i + 1} ({names[i]})") for i in idx]
+              + [Quantity(f"qd[{i + 1}]", vel[i], f"measured velocity of joint {i + 1} ({names[i]})") for i in idx])
+
+    limit = np.full(n, NO_LIMIT) if controller.tau_m_max is None else np.asarray(controller.tau_m_max, dtype=float)
+    params: list[Quantity] = []
+    p_start: list[np.ndarray] = []
+    p_tunable: list[bool] = []
+    p_min: list[float | None] = []
+    p_max: list[float | None] = []
+    p_parts: list[ca.SX] = []
+
+    def add(symbol: str, values: np.ndarray, unit: Any, text: str, lo: float | None = None) -> ca.SX:
+        units = unit if isinstance(unit, list) else [unit] * n
+        sym = ca.SX.sym(symbol, n)
+        params.extend(Quantity(f"{symbol}[{i + 1}]", units[i], f"{text}, joint {i + 1} ({names[i]})") for i in idx)
+        p_start.append(np.asarray(values, dtype=float))
+        p_tunable.extend([True] * n)
+        p_min.extend([lo] * n)
+        p_max.extend([None] * n)
+        p_parts.append(sym)
+        return sym
+
+    if isinstance(controller, ComputedTorqueController):
+        model = controller.model
+        Kp = add("Kp", controller.Kp, "1/s2", "outer-loop proportional gain (wn^2)")
+        Kd = add("Kd", controller.Kd, "1/s", "outer-loop derivative gain (2 zeta wn)")
+        tmax = add("tau_m_max", limit, "N.m", "motor torque limit", lo=0.0)
+        pq, ps, pt, plo, phi = _model_params(model, "inverse dynamics")
+        pm = ca.SX.sym("model_p", len(pq))
+        params.extend(pq)
+        p_start.append(ps)
+        p_tunable.extend(pt)
+        p_min.extend(plo)
+        p_max.extend(phi)
+        p_parts.append(pm)
+        # ComputedTorqueController.update: v = qdd_d + Kd (qd_d - qd) + Kp (q_d - q); tau_m = rne(q, qd, v) / G
+        v = qddr + Kd * (qdr - qd) + Kp * (qr - q)
+        tau_m = model.dynamics.functions.rne(q, qd, v, pm) / ca.DM(controller.G)
+        law = "computed torque tau_m = rne(q, qd, qdd_ref + Kd (qd_ref - qd) + Kp (q_ref - q)) / G"
+    elif isinstance(controller, DecentralisedController):
+        Kp = add("Kp", controller.Kp, "N.m/rad", "motor-side proportional gain")
+        Kd = add("Kd", controller.Kd, "N.m.s/rad", "motor-side derivative gain")
+        G = add("gear_ratio", controller.G, ["" if lk.is_revolute else "rad/m" for lk in robot.description.links],
+                "reduction ratio G (motor angle = G q)")
+        tmax = add("tau_m_max", limit, "N.m", "motor torque limit", lo=0.0)
+        # DecentralisedController.update: e_m = G (q_d - q), e_m' = G (qd_d - qd), tau_m = Kp e_m + Kd e_m'
+        tau_m = Kp * (G * (qr - q)) + Kd * (G * (qdr - qd))
+        law = "decentralised PD on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd)"
+        if kind == "pd-ff":
+            J = add("J_ff_m", controller.J_ff_m, "kg.m2", "fed-forward decoupled inertia, motor side", lo=0.0)
+            B = add("B_ff_m", controller.B_ff_m, "N.m.s/rad", "fed-forward viscous friction, motor side", lo=0.0)
+            tau_m = tau_m + J * G * qddr + B * G * qdr
+            law += " + J_ff_m G qdd_ref + B_ff_m G qd_ref"
+        elif kind == "pd-g":
+            gmodel = controller.gravity_model
+            if gmodel is None:
+                raise ValueError("controller: a 'pd-g' controller needs its gravity_model")
+            pq, ps, pt, plo, phi = _model_params(gmodel, "gravity compensation")
+            pm = ca.SX.sym("model_p", len(pq))
+            params.extend(pq)
+            p_start.append(ps)
+            p_tunable.extend(pt)
+            p_min.extend(plo)
+            p_max.extend(phi)
+            p_parts.append(pm)
+            tau_m = tau_m + gmodel.dynamics.functions.gravload(q, pm) / G
+            law += " + g(q) / G"
+    else:
+        raise ValueError(f"controller: expected a DecentralisedController or ComputedTorqueController, "
+                         f"got {type(controller).__name__}")
+    y = ca.fmin(ca.fmax(tau_m, -tmax), tmax)  # np.clip(tau_m, -tau_m_max, tau_m_max)
+
+    x = ca.SX.sym("x", 0)
+    u = ca.vertcat(*u_parts)
+    p = ca.vertcat(*p_parts)
+    ode = ca.Function("ode", [x, u, p], [ca.SX(0, 1)], ["x", "u", "p"], ["xdot"])
+    out = ca.Function("out", [x, u, p], [ca.densify(y)], ["x", "u", "p"], ["y"])
+    outputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque of joint {i + 1} ({names[i]}), saturated")
+                    for i in idx)
+    ident = model_identifier or re.sub(r"\W", "_", f"{robot.name}_{kind}_controller")
+    if ident[0].isdigit():
+        ident = "m_" + ident
+    return ModelSpec(
+        model_identifier=ident,
+        model_name=f"{robot.name} {kind} controller",
+        description=(f"{kind} controller of {robot.name} sampled at {controller.rate_hz:g} Hz (stateless, direct "
+                     f"feedthrough): {law}, saturated at +-tau_m_max"),
+        ode=ode, out=out,
+        states=(), x_start=np.zeros(0),
+        inputs=tuple(inputs),
+        params=tuple(params), p_start=np.concatenate(p_start), p_tunable=tuple(p_tunable), p_min=tuple(p_min),
+        p_max=tuple(p_max),
+        outputs=outputs, output_state=(-1,) * n,
+        step=controller.dt,
+    )
+
+
+def export_controller_fmu(design: RobotDesign | Controller, path: str | os.PathLike[str], *,
+                          rate_hz: float | None = None, robot: Robot | None = None, saturate: bool = True,
+                          progress: Progress | None = None) -> Path:
+    """Export the controller of ``design`` as a stateless FMI 2.0 FMU (Co-Simulation and Model Exchange).
+
+    Parameters
+    ----------
+    design
+        A :class:`~control_design.design.RobotDesign` (its ``controller(rate_hz, saturate)`` is
+        exported) or a ready :class:`~control_design.controllers.Controller`.
+    path
+        The ``.fmu`` to write; parent folders are created.
+    rate_hz
+        Control rate, Hz: the FMU's default communication step is ``1 / rate_hz`` s (default the
+        design's rate; ignored for a ready controller, which has its own).
+    robot
+        The robot driven (default ``design.robot``; required with a ready controller).
+    saturate
+        Clip at the design's torque limits (with a design only).
+    progress
+        Called with one line per build stage.
+
+    Returns
+    -------
+    Path
+        The written FMU.
+
+    Raises
+    ------
+    ValueError
+        PID controller, missing robot, joint counts that differ.
+    fmu.build.FmuBuildError
+        The generated C did not compile.
+    """
+    if isinstance(design, RobotDesign):
+        controller = design.controller(rate_hz, saturate=saturate)
+        robot = design.robot if robot is None else robot
+    elif isinstance(design, Controller):
+        controller = design
+        if robot is None:
+            raise ValueError("robot: expected the Robot the controller drives when exporting a ready Controller")
+    else:
+        raise ValueError(f"design: expected a RobotDesign or a Controller, got {type(design).__name__}")
+    return build_fmu(controller_spec(controller, robot), path, progress=progress)
+
+
+def controller_fmu_kind(path: str | os.PathLike[str]) -> tuple[str, str]:
+    """``(robot, kind)`` of a controller FMU written by :func:`export_controller_fmu` (from its modelName).
+
+    Raises
+    ------
+    ValueError
+        The file is not a controller FMU of this workbench.
+    """
+    try:
+        with zipfile.ZipFile(path) as zf:
+            root = ET.fromstring(zf.read("modelDescription.xml"))
+    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
+        raise ValueError(f"path: expected a controller FMU, could not read {str(path)!r}: {exc}") from exc
+    match = _NAME_PATTERN.match(root.get("modelName", ""))
+    if match is None:
+        raise ValueError(f"path: {str(path)!r} is not a controller FMU (modelName {root.get('modelName')!r})")
+    return match["robot"], match["kind"]
+
+
+# ----------------------------------------------------------------- validation
+
+@dataclass(frozen=True)
+class ControllerFmuReport:
+    """Checks of a controller FMU: FMPy's validation, the binary, and the law against the Python controller.
+
+    Attributes
+    ----------
+    description_problems, binary_problems
+        FMPy's ``validate_fmu`` findings and the binary's (non-FMI exports, libraries beyond libc/libm).
+    samples
+        Random (seeded) input vectors evaluated by both.
+    max_abs_diff, max_rel_diff
+        Largest ``|tau_fmu - tau_python|`` (N m) and the same over ``1 + |tau_python|``.
+    saturated_fraction
+        Fraction of the sampled torques at their limit (the test exercises the clipping too).
+    """
+
+    fmu: str
+    description_problems: tuple[str, ...]
+    binary_problems: tuple[str, ...]
+    samples: int
+    max_abs_diff: float
+    max_rel_diff: float
+    saturated_fraction: float
+
+    def problems(self, tol: float = 1e-12) -> list[str]:
+        """Everything that failed; the law must agree within ``tol`` relative (round-off of a few operations)."""
+        found = list(self.description_problems) + list(self.binary_problems)
+        if not self.max_rel_diff <= tol:
+            found.append(f"controller law differs from the Python controller by {self.max_rel_diff:.3e} "
+                         f"(relative to 1 + |tau_m|), above {tol:g}")
+        return found
+
+    def format(self) -> str:
+        """A few lines for a report."""
+        return (f"controller FMU {self.fmu}\n"
+                f"  FMPy validation: {len(self.description_problems)} problems; binary: "
+                f"{len(self.binary_problems)} problems\n"
+                f"  law vs Python over {self.samples} random inputs: max |d tau_m| = {self.max_abs_diff:.3e} N m "
+                f"(relative {self.max_rel_diff:.3e}), {100 * self.saturated_fraction:.0f} % of the torques saturated")
+
+
+def validate_controller_fmu(path: str | os.PathLike[str], controller: Controller, *, samples: int = 200,
+                            seed: int = 0) -> ControllerFmuReport:
+    """Validate a controller FMU against the Python ``controller`` it was exported from.
+
+    FMPy validates ``modelDescription.xml``; the binary must export ``fmi2`` functions
+    only. Then ``samples`` seeded random references (positions within +-2 rad or m
+    of zero, velocities +-2 /s, accelerations +-20 /s^2) and measured states go
+    through ``fmi2SetReal`` / ``fmi2GetReal`` of a Co-Simulation instance and
+    through ``controller.update``;
+    the tracking errors are drawn log-uniformly between 1e-6 and 1e-1 so that the
+    torques fall on both sides of the limits.
+    """
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    from .validate import binary_problems, model_description_problems
+
+    path = str(path)
+    described = tuple(model_description_problems(path))
+    binary = tuple(binary_problems(path)[0])
+    md = read_model_description(path)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    n = controller.n
+    rng = np.random.default_rng(seed)
+    unzip = extract(path)
+    worst_abs = worst_rel = 0.0
+    saturated = 0
+    try:
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                          instanceName="controller_check")
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        has_qdd = "qdd_ref[1]" in vr
+        groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if has_qdd else []) + ["q", "qd"]
+        in_vrs = [vr[f"{g}[{i + 1}]"] for g in groups for i in range(n)]
+        out_vrs = [vr[f"tau_m[{i + 1}]"] for i in range(n)]
+        controller.reset()
+        for k in range(samples):
+            qr, qdr = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
+            qddr = rng.uniform(-20, 20, n)
+            scale = 10.0 ** rng.uniform(-6.0, -1.0)
+            q, qd = qr + scale * rng.uniform(-1, 1, n), qdr + 10.0 * scale * rng.uniform(-1, 1, n)
+            values = {"q_ref": qr, "qd_ref": qdr, "qdd_ref": qddr, "q": q, "qd": qd}
+            slave.setReal(in_vrs, list(np.concatenate([values[g] for g in groups])))
+            fmu_tau = np.array(slave.getReal(out_vrs))
+            slave.doStep(currentCommunicationPoint=k * controller.dt, communicationStepSize=controller.dt)
+            py_tau = controller.update(k * controller.dt, q, qd, Reference(qr, qdr, qddr))
+            diff = np.abs(fmu_tau - py_tau)
+            worst_abs = max(worst_abs, float(diff.max()))
+            worst_rel = max(worst_rel, float(np.max(diff / (1.0 + np.abs(py_tau)))))
+            if controller.tau_m_max is not None:
+                saturated += int(np.sum(np.abs(py_tau) >= controller.tau_m_max))
+        slave.terminate()
+        slave.freeInstance()
+    finally:
+        shutil.rmtree(unzip, ignore_errors=True)
+    return ControllerFmuReport(path, described, binary, samples, worst_abs, worst_rel, saturated / (samples * n))

@@ -1,0 +1,632 @@
+"""Closed-loop co-simulation masters: a controller driving the plant FMU at the control rate.
+
+The timing convention is the one of :func:`control_design.simulate.simulate_tracking`,
+so the results compare sample by sample: at ``t_k = t0 + k h`` (integer k, never a
+running sum; ``h = 1 / rate_hz``) the controller reads the plant state and the
+reference ``trajectory.path`` at ``t_k``; its motor torques are held over
+``[t_k, t_k+1]`` (zero-order hold) while the plant FMU takes one
+``fmi2DoStep(t_k, h)``, integrated inside the FMU by RK4 in ``substeps`` equal
+sub-steps (its ``internal_step`` is set to ``h / substeps``, the same sub-step
+as the Python loop's).
+
+* :func:`run_closed_loop` - FMPy's low-level ``FMU2Slave`` (Gauss-Seidel order:
+  plant outputs -> controller -> plant inputs within the same instant). The
+  controller is a Python :class:`~control_design.controllers.Controller` or a
+  controller FMU (:mod:`fmu.controller_fmu`), whose torques go to the plant
+  without leaving C buffers.
+* :func:`run_libcosim_closed_loop` - the same two FMUs in libcosim, connected by
+  libcosim variable connections (plant ``q``, ``qd`` -> controller; controller
+  ``tau_m`` -> plant). libcosim's fixed-step algorithm steps every slave in
+  parallel and transfers the connected values after the step (Jacobi), so a
+  direct-feedthrough controller reaches the plant one period later: that loop is
+  the Python loop with a one-period computational delay
+  (:class:`OnePeriodDelay`), which is what it is compared with. The reference is
+  fed by Python through libcosim's override manipulator from the same
+  ``trajectory.path`` samples as the Python loop (bit-identical references; the
+  controller FMU stays a time-free law usable with any trajectory or waypoint file).
+* :func:`closed_loop_through_fmu` - what the demo calls: exports the FMUs it
+  needs into a folder, then runs :func:`run_closed_loop`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from control_design.controllers import Controller
+from control_design.design import RobotDesign
+from control_design.errors import SimulationDivergedError
+from control_design.reference import Reference
+from control_design.simulate import TrackingResult, default_substeps
+from model.robot import Robot, as_joint_vector
+from model.trajectory import Trajectory
+
+__all__ = [
+    "OnePeriodDelay",
+    "run_closed_loop",
+    "run_libcosim_closed_loop",
+    "closed_loop_through_fmu",
+]
+
+Progress = Callable[[float, float, float], None]
+Say = Callable[[str], None]
+
+_NS_PER_S = 1_000_000_000
+
+
+class OnePeriodDelay(Controller):
+    """A controller whose torques reach the plant one control period late.
+
+    ``update`` at ``t_k`` computes the inner controller's torques and returns those
+    computed at ``t_k-1`` (at ``t_0`` its own, which are therefore held for two
+    periods): the loop a Jacobi co-simulation master such as libcosim's runs.
+
+    Parameters
+    ----------
+    inner
+        The delayed controller (its rate, gear ratios and limits are this one's).
+    """
+
+    def __init__(self, inner: Controller) -> None:
+        super().__init__(inner.n, inner.rate_hz, inner.G, inner.tau_m_max)
+        self.inner = inner
+        self.kind = inner.kind
+        self._held: np.ndarray | None = None
+
+    def reset(self) -> None:
+        self.inner.reset()
+        self._held = None
+
+    def update(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
+        new = self.inner.update(t, q, qd, ref)
+        out = new if self._held is None else self._held
+        self._held = new
+        return out
+
+
+# --------------------------------------------------------------------- helpers
+
+def _plant_robot(plant_fmu: Path, plant: Robot | None) -> Robot:
+    if plant is not None:
+        return plant
+    from model import load_robot
+
+    from .validate import fmu_robot
+
+    recorded = fmu_robot(plant_fmu)
+    if recorded is None:
+        raise ValueError(f"plant: {plant_fmu.name} records no robot in its VendorAnnotations; pass the plant Robot")
+    return load_robot(recorded[0], motor_model=recorded[1])
+
+
+def _existing(path: str | os.PathLike[str], what: str) -> Path:
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"{what}: expected an FMU file, got {str(p)!r}")
+    return p
+
+
+class _Schedule:
+    """Control instants, references and initial state, as :func:`simulate_tracking` builds them."""
+
+    def __init__(self, plant: Robot, trajectory: Trajectory, dt: float, t_final: float | None, q0: Any, qd0: Any,
+                 substeps: int | None) -> None:
+        n = plant.n
+        if trajectory.n != n:
+            raise ValueError(f"trajectory: expected {n} joints like plant {plant.name!r}, got {trajectory.n}")
+        path = trajectory.path
+        t0 = path.t_start
+        t_end = path.t_end if t_final is None else float(t_final)
+        steps = int(round((t_end - t0) / dt))
+        if steps < 1:
+            raise ValueError(f"t_final: expected at least one control period ({dt:g} s) after t0 = {t0:g} s, "
+                             f"got {t_end!r}")
+        self.dt = dt
+        self.steps = steps
+        self.t = t0 + np.arange(steps + 1) * dt
+        Qr, QDr, QDDr = path.batch(self.t)
+        self.Qr, self.QDr, self.QDDr = np.asarray(Qr), np.asarray(QDr), np.asarray(QDDr)
+        self.q0 = np.array(self.Qr[0]) if q0 is None else as_joint_vector(q0, n, "q0")
+        self.qd0 = np.array(self.QDr[0]) if qd0 is None else as_joint_vector(qd0, n, "qd0")
+        self.substeps = default_substeps(plant, dt, self.q0) if substeps is None else int(substeps)
+        if self.substeps < 1:
+            raise ValueError(f"substeps: expected >= 1, got {substeps!r}")
+
+    def result(self, plant: Robot, kind: str, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray,
+               tau_m_max: np.ndarray | None, wall: float) -> TrackingResult:
+        links = plant.description.links
+        return TrackingResult(
+            controller=kind, robot=plant.name,
+            joints=tuple(lk.name or f"joint{i + 1}" for i, lk in enumerate(links)),
+            units=tuple("rad" if lk.is_revolute else "m" for lk in links),
+            t=self.t, q=Q, qd=QD, q_ref=self.Qr.copy(), qd_ref=self.QDr.copy(), qdd_ref=self.QDDr.copy(), tau_m=TAU,
+            G=np.array(plant.gear_ratio), tau_m_max=None if tau_m_max is None else np.array(tau_m_max, dtype=float),
+            rate_hz=1.0 / self.dt, substeps=self.substeps, wall_time=wall,
+        )
+
+
+def _limits(values: np.ndarray) -> np.ndarray | None:
+    from .controller_fmu import NO_LIMIT
+
+    return None if np.all(values >= NO_LIMIT) else values
+
+
+class _Instance:
+    """One FMPy Co-Simulation instance with value references resolved once and ctypes buffers."""
+
+    def __init__(self, path: Path, name: str, workdir: str) -> None:
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.md = read_model_description(str(path))
+        if self.md.coSimulation is None:
+            raise ValueError(f"{name}: {path.name} has no Co-Simulation interface")
+        unzip = extract(str(path), unzipdir=os.path.join(workdir, name))
+        self.vr = {v.name: int(v.valueReference) for v in self.md.modelVariables}
+        self.name = name
+        self.path = path
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=unzip,
+                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.live = False
+
+    def refs(self, names: Sequence[str]) -> Any:
+        from fmpy.fmi2 import fmi2ValueReference
+
+        missing = [nm for nm in names if nm not in self.vr]
+        if missing:
+            raise ValueError(f"{self.name}: no variables {missing} in {self.path.name}")
+        return (fmi2ValueReference * len(names))(*[self.vr[nm] for nm in names])
+
+    def start(self, t0: float, values: Mapping[str, float]) -> None:
+        """Instantiate, set ``values`` in initialization mode, exit it."""
+        s = self.slave
+        s.instantiate()
+        self.live = True
+        s.setupExperiment(startTime=t0)
+        s.enterInitializationMode()
+        if values:
+            names = list(values)
+            s.setReal(list(self.refs(names)), [float(values[nm]) for nm in names])
+        s.exitInitializationMode()
+
+    def get(self, names: Sequence[str]) -> np.ndarray:
+        return np.array(self.slave.getReal(list(self.refs(names))))
+
+    def close(self) -> None:
+        """Terminate and free the instance (its library with it); only unload the library if never instantiated."""
+        from fmpy.fmi1 import FMICallException
+
+        if not self.live:
+            self.slave.freeLibrary()
+            return
+        self.live = False
+        try:
+            self.slave.terminate()
+        except FMICallException:
+            pass  # an instance in error mode refuses fmi2Terminate; it is freed all the same
+        finally:
+            self.slave.freeInstance()
+
+
+def _plant_start_values(plant: Robot, sched: _Schedule) -> dict[str, float]:
+    n = plant.n
+    values = {f"q[{i + 1}]": float(sched.q0[i]) for i in range(n)}
+    values.update({f"qd[{i + 1}]": float(sched.qd0[i]) for i in range(n)})
+    values.update(dict(zip(plant.dynamics.layout.names, (float(v) for v in plant.dynamics.p))))
+    values["internal_step"] = sched.dt / sched.substeps
+    return values
+
+
+# ------------------------------------------------------------- FMPy master
+
+def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | str | os.PathLike[str],
+                    trajectory: Trajectory, *, plant: Robot | None = None, rate_hz: float | None = None,
+                    t_final: float | None = None, q0: Any = None, qd0: Any = None, substeps: int | None = None,
+                    controller_parameters: Mapping[str, float] | None = None,
+                    progress: Progress | None = None) -> TrackingResult:
+    """Run a controller on the plant FMU along ``trajectory`` with FMPy's ``FMU2Slave``.
+
+    Parameters
+    ----------
+    plant_fmu
+        The plant FMU (:func:`fmu.export_fmu`).
+    controller
+        A Python :class:`~control_design.controllers.Controller` (its ``update`` is called once
+        per period) or the path of a controller FMU (:func:`fmu.export_controller_fmu`).
+    trajectory
+        Reference; its path is evaluated at every control instant.
+    plant
+        The simulated robot: its dynamics parameters (payload, friction, gravity) are set in the
+        FMU, its joint names and gear ratios label the result (default: the robot recorded in
+        the FMU, with its default parameters).
+    rate_hz
+        Control rate, Hz (default: the Python controller's, or the controller FMU's default step).
+    t_final
+        End time, s (default: the end of the trajectory).
+    q0, qd0
+        Initial state (default: the reference at the start).
+    substeps
+        RK4 sub-steps of the plant FMU per period (default
+        :func:`~control_design.simulate.default_substeps`, as the Python loop).
+    controller_parameters
+        Parameter values set in a controller FMU before it starts (e.g. ``{"Kp[1]": 100.0}``).
+    progress
+        Called as ``progress(fraction, t, t_final)`` after every period.
+
+    Returns
+    -------
+    TrackingResult
+        Same fields and meaning as :func:`~control_design.simulate.simulate_tracking`'s; ``wall_time``
+        is the time of the loop (s).
+
+    Raises
+    ------
+    ValueError
+        Missing FMU, unknown variable, joint counts that differ, bad times.
+    control_design.errors.SimulationDivergedError
+        The plant FMU discarded a step (its state became non-finite).
+    """
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2Real
+
+    plant_path = _existing(plant_fmu, "plant_fmu")
+    plant_robot = _plant_robot(plant_path, plant)
+    n = plant_robot.n
+    py_ctrl: Controller | None = None
+    ctrl_path: Path | None = None
+    if isinstance(controller, Controller):
+        py_ctrl = controller
+        if py_ctrl.n != n:
+            raise ValueError(f"controller: expected {n} joints like plant {plant_robot.name!r}, got {py_ctrl.n}")
+        dt = py_ctrl.dt if rate_hz is None else 1.0 / rate_hz
+        if rate_hz is not None and not math.isclose(dt, py_ctrl.dt, rel_tol=1e-12):
+            raise ValueError(f"rate_hz: the Python controller runs at {py_ctrl.rate_hz:g} Hz, got {rate_hz!r}")
+        kind = py_ctrl.kind
+    else:
+        from .controller_fmu import controller_fmu_kind
+
+        ctrl_path = _existing(controller, "controller")
+        kind = controller_fmu_kind(ctrl_path)[1]
+        dt = 0.0
+    sched: _Schedule | None = None
+
+    with tempfile.TemporaryDirectory(prefix="mw_master_") as work:
+        plant_inst: _Instance | None = None
+        ctrl_inst: _Instance | None = None
+        try:
+            plant_inst = _Instance(plant_path, "plant", work)
+            ctrl_inst = None if ctrl_path is None else _Instance(ctrl_path, "controller", work)
+            if ctrl_inst is not None:
+                step = ctrl_inst.md.defaultExperiment.stepSize if ctrl_inst.md.defaultExperiment else None
+                dt = 1.0 / rate_hz if rate_hz is not None else float(step) if step else 0.0
+                if not dt > 0:
+                    raise ValueError("rate_hz: expected a control rate (the controller FMU has no default step)")
+            sched = _Schedule(plant_robot, trajectory, dt, t_final, q0, qd0, substeps)
+            x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]
+            tau_names = [f"tau_m[{i + 1}]" for i in range(n)]
+            x_vr, tau_vr = plant_inst.refs(x_names), plant_inst.refs(tau_names)
+            plant_inst.start(float(sched.t[0]), _plant_start_values(plant_robot, sched))
+            x_buf = (fmi2Real * (2 * n))()
+            x_np = np.ctypeslib.as_array(x_buf)
+            tau_buf = (fmi2Real * n)()
+            tau_np = np.ctypeslib.as_array(tau_buf)
+
+            if ctrl_inst is not None:
+                groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if "qdd_ref[1]" in ctrl_inst.vr else [])
+                ref_names = [f"{g}[{i + 1}]" for g in groups for i in range(n)]
+                u_vr = ctrl_inst.refs(ref_names + x_names)
+                y_vr = ctrl_inst.refs(tau_names)
+                ctrl_inst.start(float(sched.t[0]), dict(controller_parameters or {}))
+                tau_m_max = _limits(ctrl_inst.get([f"tau_m_max[{i + 1}]" for i in range(n)]))
+                columns = {"q_ref": sched.Qr, "qd_ref": sched.QDr, "qdd_ref": sched.QDDr}
+                R = np.ascontiguousarray(np.hstack([columns[g] for g in groups]))
+                m = R.shape[1]
+                u_buf = (fmi2Real * (m + 2 * n))()
+                u_np = np.ctypeslib.as_array(u_buf)
+            else:
+                assert py_ctrl is not None
+                tau_m_max = None if py_ctrl.tau_m_max is None else py_ctrl.tau_m_max.copy()
+
+            steps, t, h = sched.steps, sched.t, sched.dt
+            Q = np.empty((steps + 1, n))
+            QD = np.empty((steps + 1, n))
+            TAU = np.empty((steps + 1, n))
+            p_comp = plant_inst.slave.component
+            p_get, p_set, p_step = (plant_inst.slave.fmi2GetReal, plant_inst.slave.fmi2SetReal,
+                                    plant_inst.slave.fmi2DoStep)
+            n2 = 2 * n
+            start = time.perf_counter()
+            if ctrl_inst is not None:
+                c_comp = ctrl_inst.slave.component
+                c_get, c_set, c_step = (ctrl_inst.slave.fmi2GetReal, ctrl_inst.slave.fmi2SetReal,
+                                        ctrl_inst.slave.fmi2DoStep)
+                mu = m + n2
+                for k in range(steps + 1):
+                    p_get(p_comp, x_vr, n2, x_buf)
+                    Q[k], QD[k] = x_np[:n], x_np[n:]
+                    u_np[:m] = R[k]
+                    u_np[m:] = x_np
+                    c_set(c_comp, u_vr, mu, u_buf)
+                    c_get(c_comp, y_vr, n, tau_buf)
+                    TAU[k] = tau_np
+                    if k == steps:
+                        break
+                    tk = float(t[k])
+                    c_step(c_comp, tk, h, 1)
+                    try:
+                        p_set(p_comp, tau_vr, n, tau_buf)
+                        p_step(p_comp, tk, h, 1)
+                    except FMICallException as exc:
+                        raise SimulationDivergedError(
+                            f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
+                            f"diverged (controller {kind!r})") from exc
+                    if progress is not None:
+                        progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+            else:
+                assert py_ctrl is not None
+                py_ctrl.reset()
+                Qr, QDr, QDDr = sched.Qr, sched.QDr, sched.QDDr
+                for k in range(steps + 1):
+                    p_get(p_comp, x_vr, n2, x_buf)
+                    q, qd = x_np[:n].copy(), x_np[n:].copy()
+                    Q[k], QD[k] = q, qd
+                    tau_m = py_ctrl.update(float(t[k]), q, qd, Reference(Qr[k], QDr[k], QDDr[k]))
+                    TAU[k] = tau_m
+                    if k == steps:
+                        break
+                    tau_np[:] = tau_m
+                    tk = float(t[k])
+                    try:
+                        p_set(p_comp, tau_vr, n, tau_buf)  # refuses non-finite torques
+                        p_step(p_comp, tk, h, 1)           # discards a step whose state is not finite
+                    except FMICallException as exc:
+                        raise SimulationDivergedError(
+                            f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
+                            f"diverged (controller {kind!r})") from exc
+                    if progress is not None:
+                        progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+            wall = time.perf_counter() - start
+        finally:
+            for inst in (ctrl_inst, plant_inst):
+                if inst is not None:
+                    inst.close()
+    assert sched is not None
+    return sched.result(plant_robot, kind, Q, QD, TAU, tau_m_max, wall)
+
+
+# ------------------------------------------------------------ libcosim master
+
+def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: str | os.PathLike[str],
+                             trajectory: Trajectory, *, plant: Robot | None = None, rate_hz: float | None = None,
+                             t_final: float | None = None, q0: Any = None, qd0: Any = None,
+                             substeps: int | None = None, controller_parameters: Mapping[str, float] | None = None,
+                             progress: Progress | None = None, quiet: bool = True) -> TrackingResult:
+    """The plant FMU and a controller FMU connected in libcosim, the reference fed from Python.
+
+    libcosim connections carry plant ``q[i]``, ``qd[i]`` to the controller and the
+    controller's ``tau_m[i]`` to the plant; before every step the override manipulator
+    sets the controller's ``q_ref``, ``qd_ref`` (and ``qdd_ref``) to the trajectory at
+    ``t_k``, and the plant states, parameters and the controller's references start
+    from their values at ``t_0`` (libcosim initial values). libcosim's fixed-step
+    algorithm is Jacobi: the torques computed at ``t_k`` drive the plant over
+    ``[t_k+1, t_k+2]``, so the run equals the Python loop with
+    :class:`OnePeriodDelay` around the controller.
+
+    Parameters are those of :func:`run_closed_loop`; ``quiet`` sets libcosim's
+    (process-wide) log level to warnings. The result's ``tau_m[k]`` is the torque the
+    plant held over ``[t_k, t_k+1]``; ``wall_time`` the time of the stepping loop (s).
+
+    Raises
+    ------
+    ValueError
+        Missing FMU, unknown variable, a period that is not a whole number of ns.
+    fmu.cosim.CosimError
+        libcosim refused to load, connect or step.
+    """
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    from .controller_fmu import controller_fmu_kind
+    from .cosim import CosimError, _last_error
+
+    plant_path = _existing(plant_fmu, "plant_fmu").resolve()
+    ctrl_path = _existing(controller_fmu, "controller_fmu").resolve()
+    plant_robot = _plant_robot(plant_path, plant)
+    n = plant_robot.n
+    kind = controller_fmu_kind(ctrl_path)[1]
+    if rate_hz is None:
+        from fmpy import read_model_description
+
+        de = read_model_description(str(ctrl_path)).defaultExperiment
+        if de is None or not de.stepSize:
+            raise ValueError("rate_hz: expected a control rate (the controller FMU has no default step)")
+        dt = float(de.stepSize)
+    else:
+        dt = 1.0 / rate_hz
+    step_ns = int(round(dt * _NS_PER_S))
+    if step_ns < 1 or abs(step_ns - dt * _NS_PER_S) > 1e-6 * max(1.0, dt * _NS_PER_S):
+        raise ValueError(f"rate_hz: libcosim counts time in ns; the period {dt!r} s is not a whole number of ns")
+    sched = _Schedule(plant_robot, trajectory, dt, t_final, q0, qd0, substeps)
+    if quiet:
+        log_output_level(CosimLogLevel.WARNING)
+
+    execution = CosimExecution.from_step_size(step_ns)
+    held: list[Any] = []  # slaves, manipulator, observer: released after the execution that uses them
+    try:
+        index: dict[str, int] = {}
+        refs: dict[str, dict[str, int]] = {}
+        for name, path in (("plant", plant_path), ("controller", ctrl_path)):
+            slave = CosimLocalSlave(str(path), name)
+            if not slave.ptr():  # a NULL slave would crash cosim_execution_add_slave
+                raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {_last_error()}")
+            i = execution.add_local_slave(slave)
+            if i is None or i < 0:
+                raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {_last_error()}")
+            held.append(slave)
+            index[name] = i
+            refs[name] = {v.name.decode(): int(v.reference) for v in execution.slave_variables(i)}
+
+        files = {"plant": plant_path.name, "controller": ctrl_path.name}
+
+        def vrs(slave: str, names: Sequence[str]) -> list[int]:
+            missing = [nm for nm in names if nm not in refs[slave]]
+            if missing:
+                raise ValueError(f"{slave}: no variables {missing} in {files[slave]}")
+            return [refs[slave][nm] for nm in names]
+
+        x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]
+        tau_names = [f"tau_m[{i + 1}]" for i in range(n)]
+        groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if "qdd_ref[1]" in refs["controller"] else [])
+        ref_names = [f"{g}[{i + 1}]" for g in groups for i in range(n)]
+        ip, ic = index["plant"], index["controller"]
+        plant_x, plant_tau = vrs("plant", x_names), vrs("plant", tau_names)
+        ctrl_x, ctrl_tau = vrs("controller", x_names), vrs("controller", tau_names)
+        ctrl_ref = vrs("controller", ref_names)
+        limit_vrs = vrs("controller", [f"tau_m_max[{i + 1}]" for i in range(n)])
+
+        for src, dst in [(("plant", a), ("controller", b)) for a, b in zip(plant_x, ctrl_x)] + \
+                        [(("controller", a), ("plant", b)) for a, b in zip(ctrl_tau, plant_tau)]:
+            if execution.connect_real_variables(index[src[0]], src[1], index[dst[0]], dst[1]) != 0:
+                raise CosimError(f"libcosim refused the connection {src[0]}:{src[1]} -> {dst[0]}:{dst[1]}: "
+                                 f"{_last_error()}")
+        columns = {"q_ref": sched.Qr, "qd_ref": sched.QDr, "qdd_ref": sched.QDDr}
+        R = np.hstack([columns[g] for g in groups])
+        initial = [(ip, vrs("plant", [nm])[0], v) for nm, v in _plant_start_values(plant_robot, sched).items()]
+        initial += [(ic, vr, float(v)) for vr, v in zip(ctrl_ref, R[0])]
+        initial += [(ic, vrs("controller", [nm])[0], float(v)) for nm, v in (controller_parameters or {}).items()]
+        for i, vr, value in initial:
+            if not execution.real_initial_value(i, vr, value):
+                raise CosimError(f"libcosim refused the initial value {value!r} of variable {vr} of slave {i}: "
+                                 f"{_last_error()}")
+
+        manipulator = CosimManipulator.create_override()
+        observer = CosimObserver.create_last_value()
+        held += [manipulator, observer]
+        if not execution.add_manipulator(manipulator) or not execution.add_observer(observer):
+            raise CosimError(f"libcosim refused the manipulator or the observer: {_last_error()}")
+
+        steps = sched.steps
+        Q = np.empty((steps + 1, n))
+        QD = np.empty((steps + 1, n))
+        TAU = np.empty((steps + 1, n))
+        Q[0], QD[0] = sched.q0, sched.qd0
+        rows = R.tolist()
+        t = sched.t
+        start = time.perf_counter()
+        for k in range(steps):
+            if not manipulator.slave_real_values(ic, ctrl_ref, rows[k]):
+                raise CosimError(f"libcosim refused the reference at t = {t[k]:g} s: {_last_error()}")
+            if not execution.step(1):
+                raise CosimError(f"libcosim step {k + 1} (t = {t[k]:g} s) failed: {_last_error()}")
+            x = observer.last_real_values(ip, plant_x)
+            Q[k + 1], QD[k + 1] = x[:n], x[n:]
+            TAU[k] = observer.last_real_values(ip, plant_tau)
+            if progress is not None:
+                progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+        TAU[steps] = observer.last_real_values(ic, ctrl_tau)  # what the plant would hold from t_N on
+        tau_m_max = _limits(np.array(observer.last_real_values(ic, limit_vrs)))
+        wall = time.perf_counter() - start
+    finally:
+        del execution
+        held.clear()
+    if not (np.all(np.isfinite(Q)) and np.all(np.isfinite(QD))):
+        raise SimulationDivergedError(f"simulation: the libcosim closed loop diverged (controller {kind!r})")
+    return sched.result(plant_robot, kind, Q, QD, TAU, tau_m_max, wall)
+
+
+# ------------------------------------------------------- what the demo calls
+
+_BUILT: dict[tuple[Any, ...], tuple[Path, float]] = {}
+
+
+def _cached_build(key: tuple[Any, ...], path: Path, build: Callable[[], Path]) -> Path:
+    """Build ``path`` unless this process built it with the same ``key`` and nobody touched it since."""
+    known = _BUILT.get(key)
+    if known is not None and path.is_file() and path.stat().st_mtime == known[1]:
+        return path
+    built = build()
+    _BUILT[key] = (built, built.stat().st_mtime)
+    return built
+
+
+def closed_loop_through_fmu(robot: Robot, design: RobotDesign, trajectory: Trajectory,
+                            workdir: str | os.PathLike[str], *, controller_fmu: bool, rate_hz: float | None = None,
+                            plant: Robot | None = None, plant_fmu: str | os.PathLike[str] | None = None,
+                            t_final: float | None = None, saturate: bool = True, progress: Progress | None = None,
+                            say: Say | None = None) -> TrackingResult:
+    """The design's controller on the plant FMU along ``trajectory``: export what is needed, run the loop.
+
+    Parameters
+    ----------
+    robot
+        The robot (the plant unless ``plant`` is given).
+    design
+        The control design; its ``controller(rate_hz, saturate)`` is the one run.
+    trajectory
+        Reference.
+    workdir
+        Folder for the FMUs (``<plant>.fmu``, ``<robot>_<kind>_controller.fmu``); an FMU this process
+        already built there from the same inputs is reused.
+    controller_fmu
+        Run the controller as an FMU (True) or as the Python controller (False).
+    rate_hz
+        Control rate, Hz (default the design's, else :data:`control_design.design.DEFAULT_RATE_HZ`).
+    plant
+        The simulated robot when it differs from ``robot`` (payload, friction, masses).
+    plant_fmu
+        An existing plant FMU of ``plant`` to use instead of exporting one.
+    t_final
+        End time, s (default the end of the trajectory).
+    saturate
+        Clip at the design's torque limits.
+    progress
+        ``progress(fraction, t, t_final)`` after every period (e.g. ``control_design.ProgressLine``).
+    say
+        Called with one line per stage (exports, run).
+
+    Returns
+    -------
+    TrackingResult
+        As :func:`control_design.simulate.simulate_tracking` returns.
+    """
+    from .build import export_fmu
+    from .controller_fmu import controller_spec
+
+    folder = Path(workdir)
+    folder.mkdir(parents=True, exist_ok=True)
+    plant = robot if plant is None else plant
+    controller = design.controller(rate_hz, saturate=saturate)
+    if plant_fmu is None:
+        path = folder / f"{plant.name}.fmu"
+        if say is not None:
+            say(f"plant FMU {path}")
+        key = ("plant", plant.description.digest(), plant.motor_model, str(path.resolve()))
+        plant_path = _cached_build(key, path, lambda: export_fmu(plant, path, step=controller.dt,
+                                                                 motor_model=plant.motor_model))
+    else:
+        plant_path = _existing(plant_fmu, "plant_fmu")
+    ctrl: Controller | Path = controller
+    if controller_fmu:
+        spec = controller_spec(controller, robot)
+        cpath = folder / f"{spec.model_identifier}.fmu"
+        if say is not None:
+            say(f"controller FMU {cpath}")
+        key = ("controller", robot.description.digest(), robot.motor_model, spec.model_identifier,
+               spec.p_start.tobytes(), spec.step, str(cpath.resolve()))
+        from .build import build_fmu
+
+        ctrl = _cached_build(key, cpath, lambda: build_fmu(spec, cpath))
+    if say is not None:
+        say(f"closed loop: {design.kind} at {controller.rate_hz:g} Hz through {Path(plant_path).name}"
+            + (f" and {Path(ctrl).name}" if controller_fmu else " (Python controller)"))
+    return run_closed_loop(plant_path, ctrl, trajectory, plant=plant, rate_hz=controller.rate_hz, t_final=t_final,
+                           progress=progress)
