@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import time
 import warnings
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Sequence
+
+from benchmarks._timing import best_time
 
 __all__ = ["TARGET_S", "main", "best_time"]
 
@@ -32,16 +33,6 @@ RATE_HZ = 1000.0
 
 def say(text: str) -> None:
     print(text, flush=True)
-
-
-def best_time(run: Callable[[], object], repeat: int) -> float:
-    """Best wall time of ``repeat`` calls of ``run``, s."""
-    best = float("inf")
-    for _ in range(repeat):
-        start = time.perf_counter()
-        run()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def main(argv: Sequence[str] | None = None) -> int:

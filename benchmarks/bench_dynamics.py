@@ -16,10 +16,10 @@ import os
 import tempfile
 import time
 import warnings
-from typing import Callable
 
 import numpy as np
 
+from benchmarks._timing import best_time as time_best
 from model import InertiaConsistencyWarning, load_robot
 from model.description import BUILTIN_DIR
 from model.codegen import build_library
@@ -30,16 +30,6 @@ __all__ = ["main", "time_best"]
 
 def say(text: str) -> None:
     print(text, flush=True)
-
-
-def time_best(fn: Callable[[], object], repeat: int = 3) -> float:
-    """Best wall time of ``repeat`` calls, seconds."""
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def _load(name: str, motor_model: str = "reflected"):

@@ -154,12 +154,9 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
         p_parts.append(sym)
         return sym
 
-    if isinstance(controller, ComputedTorqueController):
-        model = controller.model
-        Kp = add("Kp", controller.Kp, "1/s2", "outer-loop proportional gain (wn^2)")
-        Kd = add("Kd", controller.Kd, "1/s", "outer-loop derivative gain (2 zeta wn)")
-        tmax = add("tau_m_max", limit, "N.m", "motor torque limit", lo=0.0)
-        pq, ps, pt, plo, phi = _model_params(model, "inverse dynamics")
+    def add_model(model: Robot, uses: str) -> ca.SX:
+        """The controller model's parameters ``model.*`` (see :func:`_model_params`), appended as one symbol."""
+        pq, ps, pt, plo, phi = _model_params(model, uses)
         pm = ca.SX.sym("model_p", len(pq))
         params.extend(pq)
         p_start.append(ps)
@@ -167,6 +164,14 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
         p_min.extend(plo)
         p_max.extend(phi)
         p_parts.append(pm)
+        return pm
+
+    if isinstance(controller, ComputedTorqueController):
+        model = controller.model
+        Kp = add("Kp", controller.Kp, "1/s2", "outer-loop proportional gain (wn^2)")
+        Kd = add("Kd", controller.Kd, "1/s", "outer-loop derivative gain (2 zeta wn)")
+        tmax = add("tau_m_max", limit, "N.m", "motor torque limit", lo=0.0)
+        pm = add_model(model, "inverse dynamics")
         # ComputedTorqueController.update: v = qdd_d + Kd (qd_d - qd) + Kp (q_d - q); tau_m = rne(q, qd, v) / G
         v = qddr + Kd * (qdr - qd) + Kp * (qr - q)
         tau_m = model.dynamics.functions.rne(q, qd, v, pm) / ca.DM(controller.G)
@@ -189,14 +194,7 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
             gmodel = controller.gravity_model
             if gmodel is None:
                 raise ValueError("controller: a 'pd-g' controller needs its gravity_model")
-            pq, ps, pt, plo, phi = _model_params(gmodel, "gravity compensation")
-            pm = ca.SX.sym("model_p", len(pq))
-            params.extend(pq)
-            p_start.append(ps)
-            p_tunable.extend(pt)
-            p_min.extend(plo)
-            p_max.extend(phi)
-            p_parts.append(pm)
+            pm = add_model(gmodel, "gravity compensation")
             tau_m = tau_m + gmodel.dynamics.functions.gravload(q, pm) / G
             law += " + g(q) / G"
     else:

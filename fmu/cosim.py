@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -40,6 +40,22 @@ def _last_error() -> str:
         return get_last_error_message()
     except (OSError, AttributeError, UnicodeDecodeError):
         return "no message from libcosim"
+
+
+def _add_slave(execution: Any, path: Path, name: str) -> tuple[Any, int]:
+    """Load ``path`` as libcosim slave ``name`` and add it to ``execution``: (the slave, its index).
+
+    The slave must outlive ``execution``; the caller holds it.
+    """
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    slave = CosimLocalSlave(str(path), name)
+    if not slave.ptr():  # a NULL slave would crash cosim_execution_add_slave
+        raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {_last_error()}")
+    index = execution.add_local_slave(slave)
+    if index is None or index < 0:
+        raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {_last_error()}")
+    return slave, index
 
 
 def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: float,
@@ -72,7 +88,6 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimManipulator import CosimManipulator
     from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
 
     if quiet:
         log_output_level(CosimLogLevel.WARNING)
@@ -88,12 +103,7 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     slaves = []
     indices: dict[str, int] = {}
     for name in instances:
-        slave = CosimLocalSlave(str(path), name)
-        if not slave.ptr():  # a NULL slave would crash cosim_execution_add_slave
-            raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {_last_error()}")
-        index = execution.add_local_slave(slave)
-        if index is None or index < 0:
-            raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {_last_error()}")
+        slave, index = _add_slave(execution, path, name)
         slaves.append(slave)
         indices[name] = index
 

@@ -341,6 +341,20 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
             p_get, p_set, p_step = (plant_inst.slave.fmi2GetReal, plant_inst.slave.fmi2SetReal,
                                     plant_inst.slave.fmi2DoStep)
             n2 = 2 * n
+
+            def plant_step(k: int) -> None:
+                """Step the plant over ``[t_k, t_k+1]`` with the torques in ``tau_buf``; report the progress."""
+                tk = float(t[k])
+                try:
+                    p_set(p_comp, tau_vr, n, tau_buf)  # refuses non-finite torques
+                    p_step(p_comp, tk, h, 1)           # discards a step whose state is not finite
+                except FMICallException as exc:
+                    raise SimulationDivergedError(
+                        f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
+                        f"diverged (controller {kind!r})") from exc
+                if progress is not None:
+                    progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+
             start = time.perf_counter()
             if ctrl_inst is not None:
                 c_comp = ctrl_inst.slave.component
@@ -357,17 +371,8 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                     TAU[k] = tau_np
                     if k == steps:
                         break
-                    tk = float(t[k])
-                    c_step(c_comp, tk, h, 1)
-                    try:
-                        p_set(p_comp, tau_vr, n, tau_buf)
-                        p_step(p_comp, tk, h, 1)
-                    except FMICallException as exc:
-                        raise SimulationDivergedError(
-                            f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
-                            f"diverged (controller {kind!r})") from exc
-                    if progress is not None:
-                        progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+                    c_step(c_comp, float(t[k]), h, 1)
+                    plant_step(k)
             else:
                 assert py_ctrl is not None
                 py_ctrl.reset()
@@ -381,16 +386,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                     if k == steps:
                         break
                     tau_np[:] = tau_m
-                    tk = float(t[k])
-                    try:
-                        p_set(p_comp, tau_vr, n, tau_buf)  # refuses non-finite torques
-                        p_step(p_comp, tk, h, 1)           # discards a step whose state is not finite
-                    except FMICallException as exc:
-                        raise SimulationDivergedError(
-                            f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
-                            f"diverged (controller {kind!r})") from exc
-                    if progress is not None:
-                        progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+                    plant_step(k)
             wall = time.perf_counter() - start
         finally:
             for inst in (ctrl_inst, plant_inst):
@@ -433,10 +429,9 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimManipulator import CosimManipulator
     from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
 
     from .controller_fmu import controller_fmu_kind
-    from .cosim import CosimError, _last_error
+    from .cosim import CosimError, _add_slave, _last_error
 
     plant_path = _existing(plant_fmu, "plant_fmu").resolve()
     ctrl_path = _existing(controller_fmu, "controller_fmu").resolve()
@@ -465,12 +460,7 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
         index: dict[str, int] = {}
         refs: dict[str, dict[str, int]] = {}
         for name, path in (("plant", plant_path), ("controller", ctrl_path)):
-            slave = CosimLocalSlave(str(path), name)
-            if not slave.ptr():  # a NULL slave would crash cosim_execution_add_slave
-                raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {_last_error()}")
-            i = execution.add_local_slave(slave)
-            if i is None or i < 0:
-                raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {_last_error()}")
+            slave, i = _add_slave(execution, path, name)
             held.append(slave)
             index[name] = i
             refs[name] = {v.name.decode(): int(v.reference) for v in execution.slave_variables(i)}

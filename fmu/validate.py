@@ -262,6 +262,18 @@ def _slave(fmu_path: str | os.PathLike[str], unzip_dir: str, name: str, kind: st
     return cls(guid=md.guid, unzipDirectory=unzip_dir, modelIdentifier=ident, instanceName=name)
 
 
+def _initialised(fmu_path: str | os.PathLike[str], unzip_dir: str, name: str, kind: str = "cs") -> Any:
+    """A new :func:`_slave` instantiated and initialised at t = 0 (Model Exchange: in continuous-time mode)."""
+    s = _slave(fmu_path, unzip_dir, name, kind=kind)
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    if kind == "me":
+        s.enterContinuousTimeMode()
+    return s
+
+
 def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], Sequence[float]],
                     input_names: Sequence[str], output_names: Sequence[str], step: float = 1e-3,
                     steps_before: int = 500, steps_after: int = 500) -> RoundTrip:
@@ -276,14 +288,6 @@ def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], 
     vin, vout = _vrs(md, input_names), _vrs(md, output_names)
     unzip = extract(str(fmu_path))
     try:
-        def start(name: str) -> Any:
-            s = _slave(fmu_path, unzip, name)
-            s.instantiate()
-            s.setupExperiment(startTime=0.0)
-            s.enterInitializationMode()
-            s.exitInitializationMode()
-            return s
-
         def run(s: Any, k0: int, n: int) -> np.ndarray:
             out = np.zeros((n, len(vout)))
             for k in range(k0, k0 + n):
@@ -293,7 +297,7 @@ def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], 
                 out[k - k0] = s.getReal(vout)
             return out
 
-        a = start("roundtrip_a")
+        a = _initialised(fmu_path, unzip, "roundtrip_a")
         run(a, 0, steps_before)
         state = a.getFMUstate()
         data = a.serializeFMUstate(state)
@@ -302,7 +306,7 @@ def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], 
         again = run(a, steps_before, steps_after)
         a.freeFMUstate(state)
 
-        b = start("roundtrip_b")
+        b = _initialised(fmu_path, unzip, "roundtrip_b")
         state_b = b.deSerializeFMUstate(data)
         b.setFMUstate(state_b)
         restored = run(b, steps_before, steps_after)
@@ -320,12 +324,7 @@ def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], 
 
 def _me_roundtrip(fmu_path: str | os.PathLike[str], unzip: str, md: Any) -> bool:
     nx = len(md.derivatives)
-    m = _slave(fmu_path, unzip, "roundtrip_me", kind="me")
-    m.instantiate()
-    m.setupExperiment(startTime=0.0)
-    m.enterInitializationMode()
-    m.exitInitializationMode()
-    m.enterContinuousTimeMode()
+    m = _initialised(fmu_path, unzip, "roundtrip_me", kind="me")
     rng = np.random.default_rng(1)
     x1 = _states(m, nx) + 0.1 * rng.standard_normal(nx)
     _set_states(m, x1)
@@ -394,12 +393,7 @@ def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7
         nx = len(states)
         rng = np.random.default_rng(seed)
 
-        m = _slave(fmu_path, unzip, "directional", kind="me")
-        m.instantiate()
-        m.setupExperiment(startTime=0.0)
-        m.enterInitializationMode()
-        m.exitInitializationMode()
-        m.enterContinuousTimeMode()
+        m = _initialised(fmu_path, unzip, "directional", kind="me")
         x = _states(m, nx) + 0.2 * rng.standard_normal(nx)
         _set_states(m, x)
         u = 0.05 * rng.standard_normal(len(inputs))

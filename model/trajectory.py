@@ -241,6 +241,23 @@ class JointPath:
         """``t_end - t_start``, s."""
         return self.t_end - self.t_start
 
+    def _piece(self, k: Any, h: Any, basis: tuple[Any, ...]) -> tuple[Array, Array, Array]:
+        """Position, velocity and acceleration on piece(s) ``k`` of length(s) ``h`` from the ``basis`` values.
+
+        The arithmetic of :meth:`__call__` (``k`` an int, ``h`` and the basis values
+        floats) and of :meth:`batch` (``k`` an (N,) index array, ``h`` and the basis
+        values (N, 1) columns).
+        """
+        p, dp, ddp, g0, dg0, ddg0, g1, dg1, ddg1, k0, dk0, ddk0, k1, dk1, ddk1 = basis
+        qa, qb = self.q[k], self.q[k + 1]
+        va, vb = self.qd[k], self.qd[k + 1]
+        aa, ab = self.qdd_start[k], self.qdd_end[k]
+        dq = qb - qa
+        q = (1.0 - p) * qa + p * qb + h * (g0 * va + g1 * vb) + h * h * (k0 * aa + k1 * ab)
+        qd = dp * dq / h + dg0 * va + dg1 * vb + h * (dk0 * aa + dk1 * ab)
+        qdd = ddp * dq / (h * h) + (ddg0 * va + ddg1 * vb) / h + ddk0 * aa + ddk1 * ab
+        return q, qd, qdd
+
     def __call__(self, t: float) -> tuple[Array, Array, Array]:
         """Position, velocity and acceleration at time ``t`` (s), each of shape (n,).
 
@@ -254,15 +271,7 @@ class JointPath:
         k = min(bisect.bisect_right(self._breaks, tt) - 1, len(self._breaks) - 2)
         h = float(self._h[k])
         s = min(max((tt - self._breaks[k]) / h, 0.0), 1.0)
-        p, dp, ddp, g0, dg0, ddg0, g1, dg1, ddg1, k0, dk0, ddk0, k1, dk1, ddk1 = _basis(s)  # type: ignore[arg-type]
-        qa, qb = self.q[k], self.q[k + 1]
-        va, vb = self.qd[k], self.qd[k + 1]
-        aa, ab = self.qdd_start[k], self.qdd_end[k]
-        dq = qb - qa
-        q = (1.0 - p) * qa + p * qb + h * (g0 * va + g1 * vb) + h * h * (k0 * aa + k1 * ab)
-        qd = dp * dq / h + dg0 * va + dg1 * vb + h * (dk0 * aa + dk1 * ab)
-        qdd = ddp * dq / (h * h) + (ddg0 * va + ddg1 * vb) / h + ddk0 * aa + ddk1 * ab
-        return q, qd, qdd
+        return self._piece(k, h, _basis(s))  # type: ignore[arg-type]
 
     def batch(self, t: npt.ArrayLike) -> tuple[Array, Array, Array]:
         """Position, velocity and acceleration at the (N,) times ``t`` (s), each of shape (N, n)."""
@@ -275,16 +284,7 @@ class JointPath:
         k = np.clip(np.searchsorted(b, tt, side="right") - 1, 0, b.size - 2)
         h = self._h[k][:, None]
         s = np.clip((tt - b[k]) / self._h[k], 0.0, 1.0)
-        p, dp, ddp, g0, dg0, ddg0, g1, dg1, ddg1, k0, dk0, ddk0, k1, dk1, ddk1 = (
-            x[:, None] for x in _basis(s)
-        )
-        qa, qb = self.q[k], self.q[k + 1]
-        va, vb = self.qd[k], self.qd[k + 1]
-        aa, ab = self.qdd_start[k], self.qdd_end[k]
-        dq = qb - qa
-        Q = (1.0 - p) * qa + p * qb + h * (g0 * va + g1 * vb) + h * h * (k0 * aa + k1 * ab)
-        QD = dp * dq / h + dg0 * va + dg1 * vb + h * (dk0 * aa + dk1 * ab)
-        QDD = ddp * dq / (h * h) + (ddg0 * va + ddg1 * vb) / h + ddk0 * aa + ddk1 * ab
+        Q, QD, QDD = self._piece(k, h, tuple(x[:, None] for x in _basis(s)))
         outside = (tt < b[0]) | (tt > b[-1])
         if np.any(outside):
             Q[tt < b[0]] = self.q[0]
