@@ -55,3 +55,11 @@ def test_bad_robot_file_is_a_one_line_error_with_status_2(tmp_path, capsys):
     assert main(["info", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"manip info: error: {path}, link 1: field 'gear_ratio' = 0.0: expected a non-zero number"]
+
+
+def test_build_reports_a_cold_build_then_a_cache_hit(capsys):
+    assert main(["build", "planar2r", "--force"]) == 0
+    cold = capsys.readouterr().out
+    assert "planar2r (reflected motors): cold build in " in cold and "-Werror" in cold
+    assert main(["build", "planar2r"]) == 0
+    assert "loaded from the cache in " in capsys.readouterr().out

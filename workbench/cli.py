@@ -67,6 +67,21 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def format_build(info) -> str:
+    """One line per stage of a :class:`model.codegen.BuildInfo`."""
+    if info.cached:
+        return f"loaded from the cache in {info.seconds_total:.3f} s: {info.library}"
+    return (f"cold build in {info.seconds_total:.2f} s (symbolic {info.seconds_symbolic:.2f} s, C generation "
+            f"{info.seconds_generate:.2f} s, {info.compiler} {' '.join(info.flags)} {info.seconds_compile:.2f} s): "
+            f"{info.library}")
+
+
+def _cmd_build(args: argparse.Namespace) -> int:
+    robot = model.load_robot(args.robot, motor_model=args.motor_model)
+    print(f"{robot.name} ({args.motor_model} motors): {format_build(robot.dynamics.compile(force=args.force))}")
+    return 0
+
+
 def _cmd_demo(args: argparse.Namespace) -> int:
     from .demo import run_demo  # heavy: FMU export, simulations, plots
 
@@ -84,6 +99,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("info", help="print a robot's DH table, inertial and motor data")
     p.add_argument("robot", help="built-in name or TOML file")
     p.set_defaults(func=_cmd_info)
+    p = sub.add_parser("build", help="generate, compile and cache a robot's dynamics C; report the build time")
+    p.add_argument("robot", help="built-in name or TOML file")
+    p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected", help="default reflected")
+    p.add_argument("--force", action="store_true", help="rebuild even when the cache has it")
+    p.set_defaults(func=_cmd_build)
     register_control(sub)
     register_fmu(sub)
     p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")
