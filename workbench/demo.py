@@ -21,6 +21,7 @@ import numpy as np
 
 import fmu
 from control_design import design_robot, reference_task, simulate_tracking
+from control_design.reference import reference_task_name
 from control_design.commands import save_design_plots, save_tracking_plots
 from control_design.simulate import TrackingResult
 from fmu.master import closed_loop_through_fmu
@@ -135,8 +136,12 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
 
     trajectory = reference_task(robot)
     report.heading("Task")
-    report.text(f"{trajectory.name if hasattr(trajectory, 'name') else 'reference task'}: "
+    task_name = reference_task_name(robot).replace("_", "-")
+    report.text(f"{task_name}: quintic joint segments through the waypoints below, stopping at each; "
                 f"{len(trajectory.t)} samples over {trajectory.t[-1] - trajectory.t[0]:g} s.")
+    units = ["rad" if lk.is_revolute else "m" for lk in robot.description.links]
+    report.table(["t [s]"] + [f"q{j + 1} [{u}]" for j, u in enumerate(units)],
+                 [[t, *q] for t, q in zip(trajectory.t_via, trajectory.q_via)])
 
     progress.step("designing the joint loops (decentralised PD and computed torque)")
     report.heading("Control design")
