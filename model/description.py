@@ -23,6 +23,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import re
 import types
 import warnings
 from dataclasses import dataclass, field
@@ -147,6 +148,7 @@ class RobotDescription:
 # --------------------------------------------------------------------------- parsing
 
 _TOP_REQUIRED = ("name", "links")
+_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 _TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks")
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
@@ -271,8 +273,8 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
         raise w.fail(None, "<document>", data, "a TOML table")
     _check_keys(w, None, data, _TOP_REQUIRED, _TOP_OPTIONAL)
     name = data["name"]
-    if not isinstance(name, str) or not name:
-        raise w.fail(None, "name", name, "a non-empty string")
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise w.fail(None, "name", name, "a non-empty name of letters, digits, '_', '-' and '.' (it names generated files)")
     raw_links = data["links"]
     if not isinstance(raw_links, list) or not raw_links:
         raise w.fail(None, "links", raw_links, "at least one [[links]] table")

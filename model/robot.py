@@ -26,12 +26,12 @@ __all__ = ["Robot", "load_robot", "as_joint_vector"]
 
 
 def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
-    """``value`` as a float array of shape (n,); a clear ValueError naming ``name`` otherwise."""
+    """``value`` as a float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
     arr = np.asarray(value, dtype=float)
     if arr.shape != (n,):
-        arr = arr.reshape(-1) if arr.size == n else arr
-        if arr.shape != (n,):
+        if arr.shape not in ((n, 1), (1, n)):
             raise ValueError(f"{name}: expected {n} joint values, got an array of shape {np.shape(value)}")
+        arr = arr.reshape(n)
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
     return arr

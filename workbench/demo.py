@@ -172,7 +172,8 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     fmu_results: dict[str, TrackingResult] = {}
     for kind, label in DEMO_CONTROLLERS:
         design = designs[kind]
-        via_fmu = closed_loop_through_fmu(robot, design, trajectory, out / "cosim", controller_fmu=False)
+        via_fmu = closed_loop_through_fmu(robot, design, trajectory, out / "cosim", controller_fmu=False,
+                                          plant_fmu=fmu_path)
         python = simulate_tracking(robot, design.controller(rate_hz), trajectory)
         fmu_results[kind] = via_fmu
         diff = float(np.max(np.abs(via_fmu.q - python.q)))

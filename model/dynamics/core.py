@@ -61,6 +61,9 @@ def _batch(value: Any, n: int, name: str) -> np.ndarray:
     arr = np.ascontiguousarray(value, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != n:
         raise ValueError(f"{name}: expected an (N, {n}) array, got shape {np.shape(value)}")
+    if not np.all(np.isfinite(arr)):
+        rows = np.unique(np.nonzero(~np.isfinite(arr))[0])
+        raise ValueError(f"{name}: expected finite values; rows {rows[:5].tolist()} are not")
     return arr
 
 
@@ -104,8 +107,19 @@ class Dynamics:
         return self._p.copy()
 
     def set_parameters(self, p: Any) -> None:
-        """Replace the whole parameter vector (layout :attr:`layout`)."""
-        self._p = _vector(p, self.layout.size, "p")
+        """Replace the whole parameter vector (layout :attr:`layout`), checked by the same rules as the setters.
+
+        On a bad value nothing changes and the ValueError names the field.
+        """
+        p = _vector(p, self.layout.size, "p")
+        sl, before = self.layout.slices, self._p
+        try:
+            self.set_payload(p[sl["payload_mass"]][0], p[sl["payload_com"]], p[sl["payload_inertia"]])
+            self.set_friction(p[sl["viscous_friction"]], p[sl["coulomb_friction_pos"]], p[sl["coulomb_friction_neg"]])
+            self.set_gravity(p[sl["gravity"]])
+        except ValueError as exc:
+            self._p = before
+            raise ValueError(f"p: {exc}") from None
 
     def reset_parameters(self) -> None:
         """Back to the description's friction and gravity, no payload."""
@@ -131,7 +145,7 @@ class Dynamics:
         """
         m = float(mass)
         if not np.isfinite(m) or m < 0:
-            raise ValueError(f"mass: expected a finite number >= 0 kg, got {mass!r}")
+            raise ValueError(f"mass: expected a finite number >= 0 kg, got {m!r}")
         c = _vector(com, 3, "com")
         inertia6 = _vector(inertia, 6, "inertia")
         ixx, iyy, izz, ixy, iyz, ixz = inertia6

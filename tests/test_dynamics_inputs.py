@@ -1,0 +1,74 @@
+"""Bad input to the dynamics API gets a ValueError naming the argument, and changes nothing."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from model import load_robot
+
+
+@pytest.fixture(scope="module")
+def scara():
+    return load_robot("scara")
+
+
+@pytest.mark.parametrize(
+    ("index_name", "value", "message"),
+    [
+        ("payload_mass", -5.0, "p: mass: expected a finite number >= 0 kg, got -5.0"),
+        ("coulomb_friction_pos[2]", -0.1, "p: coulomb_pos: expected values >= 0"),
+        ("coulomb_friction_neg[1]", 0.1, "p: coulomb_neg: expected values <= 0"),
+        ("viscous_friction[3]", -1e-3, "p: viscous: expected values >= 0"),
+    ],
+)
+def test_set_parameters_checks_every_field_and_is_atomic(scara, index_name, value, message):
+    dyn = scara.dynamics
+    before = dyn.p
+    p = before.copy()
+    p[dyn.layout.names.index(index_name)] = value
+    p[dyn.layout.names.index("gravity[3]")] = -1.0  # a valid change that must not land either
+    with pytest.raises(ValueError, match=re.escape(message)):
+        dyn.set_parameters(p)
+    np.testing.assert_array_equal(dyn.p, before)
+
+
+def test_set_parameters_accepts_a_valid_vector(scara):
+    dyn = scara.dynamics
+    p = dyn.p.copy()
+    p[dyn.layout.names.index("payload_mass")] = 2.0
+    dyn.set_parameters(p)
+    try:
+        assert dyn.p[dyn.layout.names.index("payload_mass")] == 2.0
+    finally:
+        dyn.reset_parameters()
+
+
+def test_batch_rejects_non_finite_rows(scara):
+    Q = np.zeros((3, 4))
+    Q[1, 2] = np.nan
+    with pytest.raises(ValueError, match=re.escape("Q: expected finite values; rows [1] are not")):
+        scara.rne_batch(Q, np.zeros((3, 4)), np.zeros((3, 4)))
+
+
+@pytest.mark.parametrize("shape", [(2, 2), (4, 1, 1)])
+def test_joint_vector_shape_is_strict(scara, shape):
+    with pytest.raises(ValueError, match=re.escape(f"q: expected 4 joint values, got an array of shape {shape}")):
+        scara.fkine(np.zeros(shape))
+
+
+@pytest.mark.parametrize("shape", [(4,), (4, 1), (1, 4)])
+def test_joint_vector_accepts_row_and_column(scara, shape):
+    assert scara.fkine(np.zeros(shape)).shape == (4, 4)
+
+
+def test_substeps_follow_the_plant_friction_as_set():
+    from control_design.simulate import default_substeps
+
+    plant = load_robot("planar2r")
+    q0 = plant.q_rest
+    base = default_substeps(plant, 1e-3, q0)
+    plant.dynamics.set_friction(viscous=[50.0, 50.0])  # 5000x the file's: a stiff friction pole
+    assert default_substeps(plant, 1e-3, q0) > base
