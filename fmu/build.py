@@ -76,14 +76,18 @@ def fmi_headers_dir() -> Path:
 
 
 def binary_platform() -> str:
-    """The FMI 2.0 platform folder of this machine (``linux64``)."""
+    """The FMI 2.0 platform folder of this machine (``linux64``).
+
+    The build (GNU ld flags, a ``.so``) is Linux only: elsewhere this raises
+    :class:`FmuBuildError`, before any work is done.
+    """
     system = platform.system()
-    bits = "64" if platform.architecture()[0] == "64bit" else "32"
-    if system == "Linux":
-        return "linux" + bits
-    if system == "Darwin":
-        return "darwin" + bits
-    raise FmuBuildError(f"platform: expected Linux or macOS for a gcc build, got {system}")
+    if system != "Linux":
+        raise FmuBuildError(
+            f"FMU export is supported on Linux (linux64) only; got {system or 'an unknown system'}. "
+            "An FMU exported on Linux carries its C code in sources/, from which importers rebuild "
+            "the binary on other platforms (e.g. FMPy's 'Compile platform binary')")
+    return "linux" + ("64" if platform.architecture()[0] == "64bit" else "32")
 
 
 def _say(progress: Progress | None, message: str) -> None:
@@ -121,29 +125,42 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     ValueError
         Bad step or motor model, unknown robot.
     FmuBuildError
-        The generated C did not compile.
+        Not on Linux, or the generated C did not compile.
     """
     from model import Robot, load_robot
-    from model.description import BUILTIN_DIR
 
+    binary_platform()  # refuse other platforms before the symbolic work
     if isinstance(robot_or_name, Robot):
         robot = robot_or_name
         if robot.motor_model != motor_model:
             robot = Robot(robot.description, motor_model=motor_model)
     else:
         robot = load_robot(robot_or_name, motor_model=motor_model)
-    # how validation finds the robot again: its built-in name, else its TOML file
-    source = Path(robot.description.path) if robot.description.path else None
-    if source is None or source.resolve() == (BUILTIN_DIR / f"{robot.name}.toml").resolve():
-        robot_ref = robot.name
-    else:
-        robot_ref = str(source.resolve())
+    digest = robot.description.digest()
+    robot_ref = _robot_reference(robot.description)
     _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {motor_model} motors)")
     from model.plant import build_plant
 
     plant = build_plant(robot)
-    spec = spec_from_plant(plant, robot, step, robot_ref=robot_ref)
+    spec = spec_from_plant(plant, robot, step, robot_ref=robot_ref, robot_digest=digest)
     return build_fmu(spec, path, progress=progress)
+
+
+def _robot_reference(description: Any) -> str:
+    """How validation and the master find the robot again: a TOML path, else the built-in name.
+
+    A TOML file other than the built-in one is recorded by its path. Anything else
+    (the built-in file, a dict, a ``dataclasses.replace`` of either) by its name,
+    which reloads the built-in robot: the FMU also records the description's digest,
+    and :func:`fmu.validate.reload_fmu_robot` refuses a reload whose digest differs
+    (a modified description that kept its name and path).
+    """
+    from model.description import BUILTIN_DIR
+
+    source = Path(description.path).resolve() if description.path else None
+    if source is not None and source != (BUILTIN_DIR / f"{description.name}.toml").resolve():
+        return str(source)
+    return description.name
 
 
 def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_inputs: int = 1,
@@ -157,6 +174,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
     path = Path(path)
     if path.suffix != ".fmu":
         raise ValueError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
+    platform_dir = binary_platform()
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_") as tmp:
         root = Path(tmp) / "fmu"
@@ -164,7 +182,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         sources.mkdir(parents=True)
         table, guid, c_files = generate_sources(spec, sources, progress=progress)
         _say(progress, "compiling with gcc " + " ".join(CFLAGS))
-        binary = root / "binaries" / binary_platform() / f"{spec.model_identifier}.so"
+        binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
         _compile(sources, c_files, binary, Path(tmp) / "obj")
         # importers that rebuild from sources/ need the FMI headers next to the code
         headers = fmi_headers_dir()
@@ -230,12 +248,8 @@ def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
     cg = ca.CodeGenerator(file_name, {"with_header": True, "casadi_int": "long long int", "casadi_real": "double"})
     for f in functions:
         cg.add(f)
-    cwd = Path.cwd()
-    try:
-        os.chdir(sources)
-        cg.generate()
-    finally:
-        os.chdir(cwd)
+    # generate(prefix) writes prefix + file name (and the header): no os.chdir, which is process-wide
+    cg.generate(str(sources.resolve()) + os.sep)
     stamp = (f"/* {STAMP}: CasADi code of the model {fid} (ode, out and their forward-mode\n"
              f" * directional derivatives), written by fmu/build.py. The exported functions are\n"
              f" * hidden: the FMU's binary exports the fmi2 functions only. */\n")

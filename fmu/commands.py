@@ -18,6 +18,16 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _internal_step(text: str) -> float:
+    """The export's ``--step``: positive, finite and not below the FMU's ``internal_step`` minimum."""
+    from .variables import MIN_STEP
+
+    value = _positive_float(text)
+    if value < MIN_STEP:
+        raise argparse.ArgumentTypeError(f"expected an internal step of at least {MIN_STEP:g} s, got {text!r}")
+    return value
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
     from .build import FmuBuildError, export_fmu
 
@@ -49,8 +59,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("export-fmu", help="export a robot as an FMI 2.0 FMU (Model Exchange and Co-Simulation)")
     p.add_argument("robot", help="built-in name or TOML file")
     p.add_argument("-o", "--output", required=True, metavar="FILE.fmu", help="the FMU to write")
-    p.add_argument("--step", type=_positive_float, default=1e-3, metavar="H",
-                   help="internal step of the co-simulation integrator (RK4), s (default 0.001)")
+    p.add_argument("--step", type=_internal_step, default=1e-3, metavar="H",
+                   help="internal step of the co-simulation integrator (RK4), s (default 0.001, at least 1e-9)")
     p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected",
                    help="motor model of the dynamics (default reflected)")
     p.set_defaults(func=_cmd_export)

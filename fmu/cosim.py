@@ -15,13 +15,26 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-__all__ = ["CosimError", "CosimResult", "run_libcosim"]
+__all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "libcosim_unavailable", "run_libcosim"]
 
 NS_PER_S = 1_000_000_000
 
 
 class CosimError(RuntimeError):
     """libcosim refused a call (load, add, connect, step); the message says which and why."""
+
+
+class LibcosimUnavailableError(CosimError):
+    """libcosimpy cannot be imported (not installed, or its native library fails to load)."""
+
+
+def libcosim_unavailable() -> str | None:
+    """Why libcosimpy cannot be used here, or None if it imports."""
+    try:
+        import libcosimpy.CosimExecution  # noqa: F401  (loads the native library)
+    except (ImportError, OSError) as exc:
+        return f"libcosimpy is not importable: {exc}"
+    return None
 
 
 @dataclass(frozen=True)
@@ -83,7 +96,17 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     quiet
         Set libcosim's (process-wide) log level to warnings; its default prints
         every FMI call.
+
+    Raises
+    ------
+    LibcosimUnavailableError
+        libcosimpy does not import (see :func:`libcosim_unavailable`).
+    CosimError
+        libcosim refused a call.
     """
+    reason = libcosim_unavailable()
+    if reason is not None:
+        raise LibcosimUnavailableError(reason)
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimManipulator import CosimManipulator

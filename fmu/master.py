@@ -95,14 +95,15 @@ class OnePeriodDelay(Controller):
 def _plant_robot(plant_fmu: Path, plant: Robot | None) -> Robot:
     if plant is not None:
         return plant
-    from model import load_robot
+    from .validate import RobotNotReloadableError, reload_fmu_robot
 
-    from .validate import fmu_robot
-
-    recorded = fmu_robot(plant_fmu)
-    if recorded is None:
+    try:
+        robot = reload_fmu_robot(plant_fmu)
+    except RobotNotReloadableError as exc:
+        raise ValueError(f"plant: {plant_fmu.name}: {exc}; pass the plant Robot as plant=") from exc
+    if robot is None:
         raise ValueError(f"plant: {plant_fmu.name} records no robot in its VendorAnnotations; pass the plant Robot")
-    return load_robot(recorded[0], motor_model=recorded[1])
+    return robot
 
 
 def _existing(path: str | os.PathLike[str], what: str) -> Path:

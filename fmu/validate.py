@@ -37,9 +37,13 @@ __all__ = [
     "ValidationReport",
     "feedforward_profile",
     "reference_response",
+    "model_description_xml",
     "model_description_problems",
     "binary_problems",
     "fmu_robot",
+    "fmu_robot_digest",
+    "RobotNotReloadableError",
+    "reload_fmu_robot",
     "tracking_error",
     "state_roundtrip",
     "directional_derivative_error",
@@ -189,14 +193,72 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
     return problems, facts
 
 
-def fmu_robot(fmu_path: str | os.PathLike[str]) -> tuple[str, str] | None:
-    """``(robot, motor_model)`` recorded in the FMU's VendorAnnotations, or None for other FMUs."""
+def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
+    """The ``modelDescription.xml`` of an FMU; ValueError names the file if it is not an FMU."""
+    if not Path(fmu_path).is_file():
+        raise ValueError(f"not an FMU: {fmu_path} is not a file")
+    if not zipfile.is_zipfile(fmu_path):
+        raise ValueError(f"not an FMU: {fmu_path} is not a zip archive")
     with zipfile.ZipFile(fmu_path) as zf:
-        root = ET.fromstring(zf.read("modelDescription.xml"))
+        if "modelDescription.xml" not in zf.namelist():
+            raise ValueError(f"not an FMU: {fmu_path} has no modelDescription.xml")
+        return zf.read("modelDescription.xml")
+
+
+def _robot_node(fmu_path: str | os.PathLike[str]) -> ET.Element | None:
+    root = ET.fromstring(model_description_xml(fmu_path))
     node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")
     if node is None or not node.get("name"):
         return None
+    return node
+
+
+def fmu_robot(fmu_path: str | os.PathLike[str]) -> tuple[str, str] | None:
+    """``(robot, motor_model)`` recorded in the FMU's VendorAnnotations, or None for other FMUs."""
+    node = _robot_node(fmu_path)
+    if node is None:
+        return None
     return node.get("name", ""), node.get("motorModel", "reflected")
+
+
+def fmu_robot_digest(fmu_path: str | os.PathLike[str]) -> str | None:
+    """The description digest recorded with the robot (``RobotDescription.digest()``), or None."""
+    node = _robot_node(fmu_path)
+    return None if node is None else node.get("digest") or None
+
+
+class RobotNotReloadableError(ValueError):
+    """The robot recorded in an FMU does not load again as the robot the FMU was built from."""
+
+
+def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
+    """The robot the FMU was built from, loaded again from its VendorAnnotations; None if none is recorded.
+
+    The recorded name or TOML path is loaded and its description digest compared
+    with the recorded one (FMUs without a digest are taken as they are).
+
+    Raises
+    ------
+    RobotNotReloadableError
+        The digests differ: the FMU was built from a modified description (one that
+        kept the built-in name or the file path), or the TOML file changed since.
+    model.RobotDescriptionError
+        The recorded TOML file no longer loads.
+    """
+    from model import Robot
+    from model.description import load_description
+
+    recorded = fmu_robot(fmu_path)
+    if recorded is None:
+        return None
+    name, motor_model = recorded
+    description = load_description(name)
+    digest = fmu_robot_digest(fmu_path)
+    if digest is not None and description.digest() != digest:
+        raise RobotNotReloadableError(
+            f"the FMU was built from a modified description (digest {digest[:16]}), not the one {name!r} "
+            f"loads now (digest {description.digest()[:16]})")
+    return Robot(description, motor_model=motor_model)
 
 
 # ---------------------------------------------------------------- tracking
@@ -472,6 +534,8 @@ class ValidationReport:
     cosim_between_instances: float | None = None
     cosim_vs_fmpy: float | None = None
     notes: list[str] = field(default_factory=list)
+    robot_skipped: str | None = None   # why the recorded robot was not reloaded (comparisons not run)
+    cosim_skipped: str | None = None   # why the libcosim check was not run
 
     def problems(self) -> list[str]:
         found = list(self.description_problems) + list(self.binary_problems)
@@ -502,7 +566,10 @@ class ValidationReport:
         lines.append(f"  binary: {facts.get('exports', '?')} exported symbols, needs {facts.get('needed', '?')}: "
                      f"{len(self.binary_problems)} problems")
         lines += [f"    - {p}" for p in self.binary_problems]
-        if self.robot is not None:
+        if self.robot is not None and self.robot_skipped is not None:
+            lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors): {self.robot_skipped}; "
+                         "simulations against the Python model not run")
+        elif self.robot is not None:
             lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors); input: {self.profile}")
             lines += [f"  note: {note}" for note in self.notes]
             lines.append(f"  open loop: the Python model leaves the planned path by {self.plan_drift:.3e} "
@@ -523,6 +590,8 @@ class ValidationReport:
         if self.cosim_between_instances is not None:
             lines.append(f"  libcosim, two instances: max difference between them {self.cosim_between_instances:.3e}, "
                          f"against FMPy Co-Simulation {self.cosim_vs_fmpy:.3e}")
+        if self.cosim_skipped is not None:
+            lines.append(f"  libcosim: skipped ({self.cosim_skipped})")
         found = self.problems()
         lines.append(f"  result: {'OK' if not found else f'{len(found)} problems'}")
         return "\n".join(lines)
@@ -532,18 +601,22 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
              with_cosim: bool = True, progress: Progress | None = None) -> ValidationReport:
     """Run every check on an FMU (see the module docstring); ``t_end`` is the simulated horizon, s."""
     fmu_path = str(fmu_path)
+    model_description_xml(fmu_path)  # ValueError naming the file if it is not an FMU
     _say(progress, "validating modelDescription.xml with FMPy")
     report = ValidationReport(fmu_path, model_description_problems(fmu_path), *binary_problems(fmu_path))
     report.robot = fmu_robot(fmu_path)
     if report.robot is None:
         return report
 
-    from model import load_robot
     from model.plant import build_plant
 
     from .simulate import simulate_cs, simulate_me, step_input
 
-    robot = load_robot(report.robot[0], motor_model=report.robot[1])
+    try:
+        robot = reload_fmu_robot(fmu_path)
+    except RobotNotReloadableError as exc:
+        report.robot_skipped = f"robot not reloadable: {exc}"
+        return report
     n = robot.n
     plant = build_plant(robot)
     p_ref = np.array(plant.param_defaults, dtype=float)
@@ -587,8 +660,10 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     report.directional = directional_derivative_error(fmu_path)
 
     if with_cosim:
-        from .cosim import run_libcosim
+        from .cosim import libcosim_unavailable, run_libcosim
 
+        report.cosim_skipped = libcosim_unavailable()
+    if with_cosim and report.cosim_skipped is None:
         _say(progress, "libcosim: two instances side by side")
         res = run_libcosim(fmu_path, stop_time=t_end, step=step, inputs=profile.at, input_names=tau_names,
                            output_names=state_names + tool_names, start_values=start)

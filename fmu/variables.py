@@ -31,6 +31,7 @@ import numpy as np
 
 __all__ = [
     "TEMPLATE_DIR",
+    "MIN_STEP",
     "Quantity",
     "ModelSpec",
     "Variable",
@@ -46,6 +47,8 @@ __all__ = [
 
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 STEP_NAME = "internal_step"
+#: Smallest internal step, s: the check of :class:`ModelSpec` and the ``min`` of ``internal_step`` in the XML.
+MIN_STEP = 1e-9
 
 # Names of the FMI variables that the table itself chooses.
 _STRUCTURED = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?)*")
@@ -95,6 +98,7 @@ class ModelSpec:
     stop_time: float = 3.0
     robot: str = ""        # built-in name or TOML path, recorded for validation
     motor_model: str = ""
+    robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
@@ -123,6 +127,9 @@ class ModelSpec:
             raise ValueError(f"output_state: expected {ny} state indices in [-1, {nx - 1}], got {self.output_state}")
         if not (math.isfinite(self.step) and self.step > 0):
             raise ValueError(f"step: expected a positive internal step in s, got {self.step!r}")
+        if self.step < MIN_STEP:
+            raise ValueError(f"step: expected an internal step of at least {MIN_STEP:g} s (the min of {STEP_NAME}), "
+                             f"got {self.step!r}")
 
 
 @dataclass(frozen=True)
@@ -240,7 +247,10 @@ class VariableTable:
 
     def _robot_annotation_attrs(self) -> str:
         spec = self.spec
-        return f"name={quoteattr(spec.robot)} motorModel={quoteattr(spec.motor_model)}"
+        attrs = f"name={quoteattr(spec.robot)} motorModel={quoteattr(spec.motor_model)}"
+        if spec.robot_digest:
+            attrs += f" digest={quoteattr(spec.robot_digest)}"
+        return attrs
 
     def _vendor_annotations(self) -> str:
         if not self.spec.robot:
@@ -366,7 +376,7 @@ def build_table(spec: ModelSpec) -> VariableTable:
                   settable="tunable" if spec.p_tunable[i] else "initial", min=spec.p_min[i], max=spec.p_max[i])
               for i, q in enumerate(spec.params)]
     add(name=STEP_NAME, kind="step", index=0, causality="parameter", variability="fixed", initial="exact",
-        start=float(spec.step), unit="s", min=1e-9, settable="initial",
+        start=float(spec.step), unit="s", min=MIN_STEP, settable="initial",
         description="step of the co-simulation integrator (classical RK4): a communication step h "
                     "takes ceil(h / internal_step) equal sub-steps")
 
@@ -413,14 +423,16 @@ def build_table(spec: ModelSpec) -> VariableTable:
 # ------------------------------------------------------------ specifications
 
 def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str | None = None,
-                    robot_ref: str | None = None) -> ModelSpec:
+                    robot_ref: str | None = None, robot_digest: str = "") -> ModelSpec:
     """The :class:`ModelSpec` of a robot's plant (``model.plant.build_plant``).
 
     States ``q[i]`` and ``qd[i]`` (also outputs), inputs the motor torques
     ``tau_m[i]``, outputs the motor positions and the tool pose, parameters
     the payload and friction (tunable) and gravity (fixed). ``robot_ref``
     (default the robot's name) is how :func:`model.load_robot` finds the
-    robot again; it is recorded in the FMU's VendorAnnotations.
+    robot again; it is recorded in the FMU's VendorAnnotations, with
+    ``robot_digest`` (the description's :meth:`~model.RobotDescription.digest`)
+    that a reload is checked against.
     """
     n = int(plant.n)
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
@@ -493,6 +505,7 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
         step=float(step),
         robot=robot_ref or robot.name,
         motor_model=robot.motor_model,
+        robot_digest=robot_digest,
     )
 
 

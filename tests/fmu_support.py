@@ -18,8 +18,8 @@ import numpy as np
 
 from model import InertiaConsistencyWarning
 
-__all__ = ["build_root", "scara_fmu", "trivial_fmu", "planar2r_full_fmu", "scara_dir", "LogRecorder", "Harness",
-           "make_callbacks"]
+__all__ = ["build_root", "scara_fmu", "trivial_fmu", "planar2r_full_fmu", "heavy_scara_fmu", "scara_dir",
+           "LogRecorder", "Harness", "make_callbacks"]
 
 
 @lru_cache(maxsize=None)
@@ -57,6 +57,19 @@ def planar2r_full_fmu() -> Path:
     from fmu import export_fmu
 
     return _quiet(export_fmu, "planar2r", build_root() / "planar2r_full.fmu", step=5e-4, motor_model="full")
+
+
+@lru_cache(maxsize=None)
+def heavy_scara_fmu() -> Path:
+    """A modified SCARA: link masses and inertias x 1.5 (``plant_with_mismatch``; same name and path)."""
+    from control_design import plant_with_mismatch
+    from control_design.computed_torque import ModelMismatch
+    from fmu import export_fmu
+    from model import load_robot
+
+    robot = _quiet(load_robot, "scara")
+    heavy = _quiet(plant_with_mismatch, robot, ModelMismatch(link_mass_scale=1.5))
+    return _quiet(export_fmu, heavy, build_root() / "scara_heavy.fmu")
 
 
 @lru_cache(maxsize=None)

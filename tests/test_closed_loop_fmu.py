@@ -39,7 +39,7 @@ from fmu.controller_fmu import NO_LIMIT, controller_spec
 from fmu.master import OnePeriodDelay, closed_loop_through_fmu
 from model import InertiaConsistencyWarning, load_robot
 
-from fmu_support import scara_fmu
+from fmu_support import heavy_scara_fmu, scara_fmu
 
 TOL_Q = 1e-10    # rad or m
 TOL_QD = 1e-8    # rad/s or m/s
@@ -264,3 +264,17 @@ def test_bad_inputs_are_named(robot, task, designs, plant_fmu, tmp_path):
         run_closed_loop(plant_fmu, controller, task, plant=robot, t_final=0.0)
     with pytest.raises(ValueError, match="rate_hz: the Python controller runs at 1000 Hz"):
         run_closed_loop(plant_fmu, controller, task, plant=robot, rate_hz=500.0)
+
+
+def test_a_plant_fmu_of_a_modified_robot_needs_the_plant_argument(robot, task, designs):
+    """The mass-scaled SCARA FMU records the name scara: the master must not simulate it as the built-in SCARA."""
+    controller = designs["pd"].controller(RATE)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        heavy = heavy_scara_fmu()
+        with pytest.raises(ValueError, match=r"built from a modified description \(digest .*pass the plant Robot "
+                                             r"as plant="):
+            run_closed_loop(heavy, controller, task, t_final=0.01)
+        plant = plant_with_mismatch(robot, ModelMismatch(link_mass_scale=1.5))
+    result = run_closed_loop(heavy, controller, task, plant=plant, t_final=0.01)
+    assert result.t.size == 11

@@ -20,7 +20,7 @@ from fmu.variables import build_table, derivative_unit, parse_unit, spec_from_pl
 from model import InertiaConsistencyWarning, load_robot
 from model.plant import build_plant
 
-from fmu_support import build_root, planar2r_full_fmu, scara_fmu, trivial_fmu
+from fmu_support import build_root, heavy_scara_fmu, planar2r_full_fmu, scara_fmu, trivial_fmu
 
 
 @pytest.fixture(scope="module")
@@ -106,6 +106,20 @@ def test_spec_rejects_bad_input():
         trivial_spec(0.0)
     with pytest.raises(ValueError, match="n_inputs: expected at least 1 input, got 0"):
         trivial_spec(1e-3, n_inputs=0)
+
+
+def test_spec_rejects_a_step_below_the_minimum_declared_in_the_xml():
+    from fmu.variables import MIN_STEP
+
+    with pytest.raises(ValueError, match=r"step: expected an internal step of at least 1e-09 s "
+                                         r"\(the min of internal_step\), got 1e-10"):
+        trivial_spec(1e-10)
+    table = build_table(trivial_spec(MIN_STEP))
+    step = next(v for v in table.variables if v.name == "internal_step")
+    assert step.min == MIN_STEP == 1e-9 and step.start == MIN_STEP
+    root = ET.fromstring(table.model_description("{guid}", [], "0"))
+    xml = next(v for v in root.find("ModelVariables") if v.get("name") == "internal_step")
+    assert float(xml.find("Real").get("min")) == MIN_STEP
 
 
 # ------------------------------------------------------ description and binary
@@ -218,6 +232,56 @@ def test_cli_export_fmu_rejects_a_bad_step(capsys):
     with pytest.raises(SystemExit):
         main(["export-fmu", "scara", "-o", "x.fmu", "--step", "-1"])
     assert "expected a positive finite step in s, got '-1'" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["export-fmu", "scara", "-o", "x.fmu", "--step", "1e-10"])
+    assert "expected an internal step of at least 1e-09 s, got '1e-10'" in capsys.readouterr().err
+
+
+def test_export_leaves_the_working_directory_alone(tmp_path, monkeypatch):
+    """os.chdir is process-wide: two exports in two threads must not move each other's cwd."""
+    import os
+
+    def no_chdir(path):
+        raise AssertionError(f"os.chdir({path!r}) during an export")
+
+    cwd = os.getcwd()
+    monkeypatch.setattr(os, "chdir", no_chdir)
+    path = fmu.export_trivial_fmu(tmp_path / "trivial.fmu")
+    assert os.getcwd() == cwd
+    with zipfile.ZipFile(path) as zf:
+        assert {"sources/trivial_casadi.c", "sources/trivial_casadi.h"} <= set(zf.namelist())
+
+
+@pytest.mark.parametrize("system", ["Darwin", "Windows"])
+def test_export_outside_linux_is_refused_with_a_clear_error(system, tmp_path, monkeypatch):
+    import platform
+
+    from fmu.build import FmuBuildError, binary_platform
+
+    monkeypatch.setattr(platform, "system", lambda: system)
+    message = rf"FMU export is supported on Linux \(linux64\) only; got {system}\b.*sources/"
+    with pytest.raises(FmuBuildError, match=message):
+        binary_platform()
+    with pytest.raises(FmuBuildError, match=message):
+        fmu.export_trivial_fmu(tmp_path / "trivial.fmu")
+    with pytest.raises(FmuBuildError, match=message):
+        fmu.export_fmu("planar2r", tmp_path / "planar2r.fmu")
+    assert not any(tmp_path.iterdir())
+
+
+def test_the_description_digest_is_recorded_and_a_modified_robot_is_not_reloaded():
+    from fmu.validate import fmu_robot_digest, reload_fmu_robot
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        scara = load_robot("scara")
+        assert fmu_robot_digest(scara_fmu()) == scara.description.digest()
+        assert reload_fmu_robot(scara_fmu()).description.digest() == scara.description.digest()
+        digest = fmu_robot_digest(heavy_scara_fmu())
+        assert digest is not None and digest != scara.description.digest()
+        with pytest.raises(ValueError, match=rf"the FMU was built from a modified description \(digest {digest[:12]}"):
+            reload_fmu_robot(heavy_scara_fmu())
+    assert fmu_robot_digest(trivial_fmu()) is None
 
 
 def test_wrapper_compiles_cleanly_with_pedantic_warnings(tmp_path):

@@ -19,7 +19,7 @@ from fmu.validate import (ME_RTOL, TOLERANCES, directional_derivative_error, fee
 from model import InertiaConsistencyWarning, load_robot
 from model.plant import build_plant
 
-from fmu_support import Harness, scara_fmu
+from fmu_support import Harness, heavy_scara_fmu, scara_fmu
 
 N = 4
 TAU = [f"tau_m[{i}]" for i in range(1, N + 1)]
@@ -190,3 +190,47 @@ def test_validate_a_robot_from_a_file_with_coulomb_friction(tmp_path):
     assert report.ok, report.problems()
     assert any("Coulomb friction set to 0" in note for note in report.notes)
     assert "quintic from rest" in report.profile
+
+
+def test_validate_without_libcosimpy_skips_the_libcosim_check(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "libcosimpy", None)   # `import libcosimpy` now raises ImportError
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        report = validate_fmu(scara_fmu(), t_end=0.5, with_cosim=True)
+    text = report.format()
+    assert report.ok, report.problems()
+    assert report.cosim_between_instances is None and report.cosim_skipped
+    assert "libcosim: skipped (libcosimpy is not importable" in text and "result: OK" in text
+
+
+def test_validate_fmu_command_names_a_file_that_is_not_an_fmu(tmp_path, capsys):
+    import zipfile
+
+    from workbench.cli import main
+
+    text = tmp_path / "bad.fmu"
+    text.write_text("not a zip")
+    assert main(["validate-fmu", str(text)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert f"not an FMU: {text} is not a zip archive" in err
+    empty = tmp_path / "empty.fmu"
+    with zipfile.ZipFile(empty, "w") as zf:
+        zf.writestr("readme.txt", "no model description")
+    assert main(["validate-fmu", str(empty)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"not an FMU: {empty} has no modelDescription.xml" in err
+
+
+def test_validate_does_not_compare_a_modified_robot_with_the_built_in_one():
+    """An FMU of a mass-scaled SCARA records the name scara; validation must not reload the built-in SCARA."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        report = validate_fmu(heavy_scara_fmu(), with_cosim=False)
+    text = report.format()
+    print(text)
+    assert report.errors == [] and report.roundtrip is None
+    assert "robot not reloadable: the FMU was built from a modified description (digest " in text
+    assert report.ok, report.problems()
