@@ -31,7 +31,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -44,6 +44,7 @@ __all__ = [
     "CompilerNotFoundError",
     "CompiledLibrary",
     "FunctionSignature",
+    "PointEvaluator",
     "build_library",
     "cache_dir",
     "find_compiler",
@@ -177,6 +178,10 @@ class CompiledLibrary:
     def __contains__(self, name: str) -> bool:
         return name in self.signatures
 
+    def point_evaluator(self, name: str, external: Mapping[int, np.ndarray] | None = None) -> "PointEvaluator":
+        """A :class:`PointEvaluator` of Function ``name`` (one point per call, buffers allocated once)."""
+        return PointEvaluator(self, name, external)
+
     def evaluate(self, name: str, inputs: Sequence[np.ndarray], n_points: int) -> list[np.ndarray]:
         """Evaluate Function ``name`` at ``n_points`` points in one C call.
 
@@ -213,6 +218,80 @@ class CompiledLibrary:
         if status != 0:
             raise RuntimeError(f"{name}: compiled evaluation failed with status {status}")
         return outputs
+
+
+class PointEvaluator:
+    """One Function of a :class:`CompiledLibrary` evaluated at a single point, everything allocated once.
+
+    The pointer arrays (``arg``, ``res``), the work vectors (``iw``, ``w``), the
+    input buffers :attr:`inputs` (views into one contiguous float64 :attr:`block`)
+    and the output buffers :attr:`outputs` are built here; a call writes nothing
+    but the outputs and calls the generated function directly (the same code,
+    ``mem`` 0 and work sizes as ``mw_batch``, so results are bit-identical to
+    :meth:`CompiledLibrary.evaluate`).
+
+    Inputs listed in ``external`` are not copied: the evaluator reads the given
+    array in place (e.g. the parameter vector), see :meth:`bind`.
+
+    Not thread-safe: calls share the buffers and work vectors. Use one instance
+    per thread (the generated code itself is re-entrant).
+    """
+
+    __slots__ = ("name", "signature", "block", "inputs", "outputs", "bound", "_lib", "_fn", "_arg", "_res", "_iw", "_w")
+
+    def __init__(self, library: CompiledLibrary, name: str, external: Mapping[int, np.ndarray] | None = None) -> None:
+        sig = library.signatures[name]
+        external = dict(external or {})
+        if not set(external) <= set(range(len(sig.in_sizes))):
+            raise ValueError(f"{name}: external inputs {sorted(external)} out of range 0..{len(sig.in_sizes) - 1}")
+        self.name, self.signature, self._lib = name, sig, library
+        internal = [j for j in range(len(sig.in_sizes)) if j not in external]
+        self.block = np.zeros(sum(sig.in_sizes[j] for j in internal))
+        inputs: list[np.ndarray | None] = [None] * len(sig.in_sizes)
+        offset = 0
+        for j in internal:
+            inputs[j] = self.block[offset:offset + sig.in_sizes[j]]
+            offset += sig.in_sizes[j]
+        self.inputs = tuple(inputs)
+        self.outputs = tuple(np.zeros(r * c) for r, c in sig.out_shapes)
+        f_ptr, w_ptr = library._pointers[name]
+        sizes = [ctypes.c_longlong(0) for _ in range(4)]
+        work = ctypes.CFUNCTYPE(ctypes.c_int, *[ctypes.POINTER(ctypes.c_longlong)] * 4)(w_ptr)
+        if work(*[ctypes.byref(s) for s in sizes]) != 0:
+            raise RuntimeError(f"{name}: work-size query failed")
+        sz_arg, sz_res, sz_iw, sz_w = (s.value for s in sizes)
+        if sz_arg < len(sig.in_sizes) or sz_res < len(sig.out_shapes):
+            raise RuntimeError(f"{name}: work sizes smaller than the signature")
+        self._arg = (ctypes.c_void_p * sz_arg)()
+        self._res = (ctypes.c_void_p * sz_res)(*[o.ctypes.data for o in self.outputs])
+        self._iw = (ctypes.c_longlong * max(sz_iw, 1))()
+        self._w = (ctypes.c_double * max(sz_w, 1))()
+        self.bound: list[np.ndarray] = [a for a in self.inputs]  # type: ignore[misc]
+        for j, buf in enumerate(self.inputs):
+            if buf is not None:
+                self._arg[j] = buf.ctypes.data
+        for j, arr in external.items():
+            self.bind(j, arr)
+        # No argtypes: the ctypes arrays pass as pointers and 0 as int, with no per-call conversion.
+        self._fn = ctypes.CFUNCTYPE(ctypes.c_int)(f_ptr)
+
+    def bind(self, j: int, array: np.ndarray) -> None:
+        """Read input ``j`` from ``array`` in place (kept referenced) from now on."""
+        size, arg = self.signature.in_sizes[j], self.signature.in_names[j]
+        if self.inputs[j] is not None:
+            raise ValueError(f"{arg}: not an external input of {self.name}")
+        if not isinstance(array, np.ndarray) or array.dtype != np.float64 or not array.flags.c_contiguous:
+            raise ValueError(f"{arg}: expected a C-contiguous float64 array")
+        if array.shape != (size,):
+            raise ValueError(f"{arg}: expected shape ({size},), got {array.shape}")
+        self._arg[j] = array.ctypes.data
+        self.bound[j] = array
+
+    def __call__(self) -> None:
+        """Evaluate at the point held by the input buffers; the results land in :attr:`outputs`."""
+        status = self._fn(self._arg, self._res, self._iw, self._w, 0)
+        if status != 0:
+            raise RuntimeError(f"{self.name}: compiled evaluation failed with status {status}")
 
 
 def _key(key_material: str, compiler: str, flags: Sequence[str]) -> str:

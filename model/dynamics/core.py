@@ -8,6 +8,7 @@ CasADi's own evaluation and warn once.
 from __future__ import annotations
 
 import hashlib
+import math
 import threading
 import warnings
 from functools import cached_property
@@ -17,7 +18,7 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, build_library
+from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, PointEvaluator, build_library
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import ParameterLayout, parameter_layout
@@ -45,13 +46,22 @@ class NoCompilerWarning(RuntimeWarning):
     """No C compiler: the numeric API evaluates with CasADi (correct, but much slower)."""
 
 
-def _vector(value: Any, size: int, name: str) -> np.ndarray:
+_F64 = np.dtype(np.float64)
+
+
+def _shaped(value: Any, size: int, name: str) -> np.ndarray:
+    """``value`` as a float array of shape (size,) ((1, size) and (size, 1) reshaped); finiteness not checked."""
     arr = np.asarray(value, dtype=float)
     if arr.shape != (size,):
         if arr.size == size and arr.ndim == 2 and 1 in arr.shape:
             arr = arr.reshape(size)
         else:
             raise ValueError(f"{name}: expected {size} values (shape ({size},)), got shape {np.shape(value)}")
+    return arr
+
+
+def _vector(value: Any, size: int, name: str) -> np.ndarray:
+    arr = _shaped(value, size, name)
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
     return np.ascontiguousarray(arr)
@@ -95,6 +105,8 @@ class Dynamics:
         self._build_info: BuildInfo | None = None
         self._fallback = False
         self._lock = threading.Lock()
+        # Per-thread single-point evaluators (buffers are not shareable between threads); replaced on compile.
+        self._points = threading.local()
 
     def __repr__(self) -> str:
         state = "compiled" if self._library else ("casadi" if self._fallback else "not built")
@@ -204,6 +216,7 @@ class Dynamics:
             funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
             self._library, self._build_info = build_library(stem, key, funcs)
             self._fallback = False
+            self._points = threading.local()
             return self._build_info
 
     def _backend(self) -> CompiledLibrary | None:
@@ -226,35 +239,78 @@ class Dynamics:
         rows, cols_per_point = f.size1_out(0), f.size2_out(0)
         return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
 
+    def _new_point(self, name: str) -> PointEvaluator | None:
+        """This thread's :class:`PointEvaluator` of ``name`` (parameter input bound to ``p``); None on the CasADi fallback."""
+        lib = self._backend()
+        if lib is None:
+            return None
+        points = self._points
+        ev = lib.point_evaluator(name, {len(lib.signatures[name].in_sizes) - 1: self._p})
+        setattr(points, name, ev)
+        return ev
+
+    def _point(self, name: str, values: tuple[Any, ...], names: tuple[str, ...]) -> np.ndarray:
+        """(numel,) first output of Function ``name`` at one point: the joint vectors ``values`` and :attr:`p`.
+
+        Same checks, messages and bits as ``_eval`` on ``_vector`` of each value, without per-call
+        allocation: the values are copied into this thread's preallocated buffers (a float64 vector of
+        the right shape directly, anything else through ``_shaped``), checked finite at once (a finite
+        sum implies finite terms), and on any failure re-checked one by one by ``_vector`` in argument
+        order so that the first bad argument raises its usual error. Returns a fresh array.
+        """
+        ev: PointEvaluator | None = getattr(self._points, name, None)
+        if ev is None:
+            ev = self._new_point(name)
+            if ev is None:
+                n = self.n
+                return self._eval(name, [*(_vector(v, n, k) for v, k in zip(values, names)), self._p], 1)[0]
+        error: Exception | None = None
+        try:
+            for v, buf, k in zip(values, ev.inputs, names):
+                if type(v) is np.ndarray and v.dtype is _F64 and v.shape == buf.shape:
+                    buf[...] = v
+                else:
+                    buf[...] = _shaped(v, self.n, k)
+            ok = math.isfinite(sum(ev.block.tolist()))
+        except Exception as exc:  # noqa: BLE001 - re-raised below in argument order
+            error, ok = exc, False
+        if not ok:  # raises the error of the first bad argument; a mere overflow of the sum passes
+            for v, k in zip(values, names):
+                _vector(v, self.n, k)
+            if error is not None:
+                raise error
+        p = self._p
+        if ev.bound[-1] is not p:
+            ev.bind(len(ev.bound) - 1, p)
+        ev()
+        return ev.outputs[0].copy()
+
     # --------------------------------------------------------------- numeric
     def inertia(self, q: Any) -> np.ndarray:
         """(n, n) joint-space inertia B(q) (motor inertia included)."""
         n = self.n
-        return self._eval("inertia", [_vector(q, n, "q"), self._p], 1)[0].reshape(n, n, order="F")
+        return self._point("inertia", (q,), ("q",)).reshape(n, n, order="F")
 
     def coriolis(self, q: Any, qd: Any) -> np.ndarray:
         """(n, n) Coriolis/centrifugal matrix C(q, qd) (Christoffel symbols of the first kind)."""
         n = self.n
-        out = self._eval("coriolis", [_vector(q, n, "q"), _vector(qd, n, "qd"), self._p], 1)
-        return out[0].reshape(n, n, order="F")
+        return self._point("coriolis", (q, qd), ("q", "qd")).reshape(n, n, order="F")
 
     def gravload(self, q: Any) -> np.ndarray:
         """(n,) gravity torque g(q) (payload included)."""
-        return self._eval("gravload", [_vector(q, self.n, "q"), self._p], 1)[0]
+        return self._point("gravload", (q,), ("q",))
 
     def friction(self, qd: Any) -> np.ndarray:
         """(n,) friction torque F(qd) the joints must overcome (= -RTB ``Link.friction``)."""
-        return self._eval("friction", [_vector(qd, self.n, "qd"), self._p], 1)[0]
+        return self._point("friction", (qd,), ("qd",))
 
     def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
         """(n,) joint torques ``B qdd + C qd + g + F`` (Newton-Euler)."""
-        n = self.n
-        return self._eval("rne", [_vector(q, n, "q"), _vector(qd, n, "qd"), _vector(qdd, n, "qdd"), self._p], 1)[0]
+        return self._point("rne", (q, qd, qdd), ("q", "qd", "qdd"))
 
     def accel(self, q: Any, qd: Any, tau: Any) -> np.ndarray:
         """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)``."""
-        n = self.n
-        return self._eval("accel", [_vector(q, n, "q"), _vector(qd, n, "qd"), _vector(tau, n, "tau"), self._p], 1)[0]
+        return self._point("accel", (q, qd, tau), ("q", "qd", "tau"))
 
     def _batch3(self, name: str, A: Any, Bv: Any, Cv: Any, names: tuple[str, str, str]) -> np.ndarray:
         n = self.n
