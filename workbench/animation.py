@@ -42,6 +42,12 @@ def _setup_axes(ax, centre: np.ndarray, half: float, title: str) -> None:
     ax.set_title(title)
 
 
+def _draw_base(ax, z_floor: float) -> None:
+    """A grey pedestal from the floor of the scene up to the base origin, and the base marked."""
+    ax.plot([0.0, 0.0], [0.0, 0.0], [min(z_floor, 0.0), 0.0], "-", lw=6, color="0.6", solid_capstyle="butt")
+    ax.plot([0.0], [0.0], [0.0], "ks", ms=7)
+
+
 def plot_arm(robot: Robot, q: np.ndarray, ax=None) -> plt.Figure:
     """Draw the arm at configuration ``q`` (rad / m) in 3-D; returns the figure."""
     frames = robot.fkine_all(q)
@@ -50,6 +56,7 @@ def plot_arm(robot: Robot, q: np.ndarray, ax=None) -> plt.Figure:
     p = frames[:, 0:3, 3]
     centre, half = _limits(np.vstack([p, np.zeros((1, 3))]))
     _setup_axes(ax, centre, half, f"{robot.name} at q = {np.round(q, 3).tolist()}")
+    _draw_base(ax, centre[2] - half)
     ax.plot(p[:, 0], p[:, 1], p[:, 2], "o-", lw=3, color="tab:blue")
     ax.plot(*p[-1], "s", color="tab:red")
     return fig
@@ -82,6 +89,7 @@ def animate_arm(
     fig = plt.figure(figsize=(5.5, 5.5))
     ax = fig.add_subplot(projection="3d")
     _setup_axes(ax, centre, half, robot.name)
+    _draw_base(ax, centre[2] - half)
     ax.view_init(elev=25, azim=-60)
     (arm_line,) = ax.plot([], [], [], "o-", lw=3, color="tab:blue")
     (trace,) = ax.plot([], [], [], "-", lw=1, color="tab:red")
