@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
+from .arrays import finite_vector
 from .description import RobotDescription, load_description
 from .kinematics import KinematicsFunctions, build_kinematics
 
@@ -26,15 +27,8 @@ __all__ = ["Robot", "load_robot", "as_joint_vector"]
 
 
 def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
-    """``value`` as a float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (n,):
-        if arr.shape not in ((n, 1), (1, n)):
-            raise ValueError(f"{name}: expected {n} joint values, got an array of shape {np.shape(value)}")
-        arr = arr.reshape(n)
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
-    return arr
+    """``value`` as a finite float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
+    return finite_vector(value, n, name, "joint values")
 
 
 def _as_pose(T: Any) -> np.ndarray:
@@ -157,30 +151,30 @@ class Robot:
 
     def inertia(self, q: Any) -> np.ndarray:
         """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included."""
-        return self.dynamics.inertia(self._q(q))
+        return self.dynamics.inertia(q)
 
     def coriolis(self, q: Any, qd: Any) -> np.ndarray:
         """(n, n) Coriolis/centrifugal matrix C(q, qd) from Christoffel symbols."""
-        return self.dynamics.coriolis(self._q(q), self._q(qd, "qd"))
+        return self.dynamics.coriolis(q, qd)
 
     def gravload(self, q: Any) -> np.ndarray:
         """(n,) gravity torque g(q): the joint torque that holds the arm still."""
-        return self.dynamics.gravload(self._q(q))
+        return self.dynamics.gravload(q)
 
     def friction(self, qd: Any) -> np.ndarray:
         """(n,) friction torque F(qd) the joints must overcome: G^2 B qd + |G| Tc(sign qd).
 
         Note the sign: the Robotics Toolbox's ``Link.friction`` returns ``-F``.
         """
-        return self.dynamics.friction(self._q(qd, "qd"))
+        return self.dynamics.friction(qd)
 
     def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
         """(n,) joint torques for the motion (inverse dynamics), motor and friction terms included."""
-        return self.dynamics.rne(self._q(q), self._q(qd, "qd"), self._q(qdd, "qdd"))
+        return self.dynamics.rne(q, qd, qdd)
 
     def accel(self, q: Any, qd: Any, tau: Any) -> np.ndarray:
         """(n,) joint accelerations under joint torques ``tau`` (forward dynamics)."""
-        return self.dynamics.accel(self._q(q), self._q(qd, "qd"), self._q(tau, "tau"))
+        return self.dynamics.accel(q, qd, tau)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays."""

@@ -18,6 +18,7 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
+from ..arrays import finite_vector, shaped_vector
 from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, PointEvaluator, build_library
 from ..description import RobotDescription
 from .motors import check_motor_model
@@ -50,21 +51,13 @@ _F64 = np.dtype(np.float64)
 
 
 def _shaped(value: Any, size: int, name: str) -> np.ndarray:
-    """``value`` as a float array of shape (size,) ((1, size) and (size, 1) reshaped); finiteness not checked."""
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (size,):
-        if arr.size == size and arr.ndim == 2 and 1 in arr.shape:
-            arr = arr.reshape(size)
-        else:
-            raise ValueError(f"{name}: expected {size} values (shape ({size},)), got shape {np.shape(value)}")
-    return arr
+    """A joint vector of shape (size,) (see :func:`model.arrays.shaped_vector`); finiteness not checked."""
+    return shaped_vector(value, size, name, "joint values")
 
 
-def _vector(value: Any, size: int, name: str) -> np.ndarray:
-    arr = _shaped(value, size, name)
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
-    return np.ascontiguousarray(arr)
+def _vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
+    """A finite, contiguous vector of shape (size,) (see :func:`model.arrays.finite_vector`)."""
+    return finite_vector(value, size, name, what)
 
 
 def _batch(value: Any, n: int, name: str) -> np.ndarray:
@@ -263,7 +256,7 @@ class Dynamics:
             ev = self._new_point(name)
             if ev is None:
                 n = self.n
-                return self._eval(name, [*(_vector(v, n, k) for v, k in zip(values, names)), self._p], 1)[0]
+                return self._eval(name, [*(_vector(v, n, k, "joint values") for v, k in zip(values, names)), self._p], 1)[0]
         error: Exception | None = None
         try:
             for v, buf, k in zip(values, ev.inputs, names):
@@ -276,7 +269,7 @@ class Dynamics:
             error, ok = exc, False
         if not ok:  # raises the error of the first bad argument; a mere overflow of the sum passes
             for v, k in zip(values, names):
-                _vector(v, self.n, k)
+                _vector(v, self.n, k, "joint values")
             if error is not None:
                 raise error
         p = self._p

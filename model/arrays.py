@@ -1,0 +1,32 @@
+"""One rule for fixed-shape vector arguments: shape (size,), or (size, 1) / (1, size) reshaped, finite.
+
+Every public numeric function of the workbench checks its vector arguments
+through these two functions, so the accepted shapes and the error messages
+are the same everywhere.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["shaped_vector", "finite_vector"]
+
+
+def shaped_vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
+    """``value`` as a float array of shape (size,); a ValueError naming ``name`` otherwise (finiteness not checked)."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (size,):
+        if arr.shape not in ((size, 1), (1, size)):
+            raise ValueError(f"{name}: expected {size} {what}, got an array of shape {np.shape(value)}")
+        arr = arr.reshape(size)
+    return arr
+
+
+def finite_vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
+    """:func:`shaped_vector`, also finite and C-contiguous."""
+    arr = shaped_vector(value, size, name, what)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
+    return np.ascontiguousarray(arr)
