@@ -175,9 +175,6 @@ class VariableTable:
     initial_unknowns: tuple[Unknown, ...]
     units: dict[str, dict[str, int] | None] = field(compare=False)
 
-    def by_kind(self, kind: str) -> tuple[Variable, ...]:
-        return tuple(v for v in self.variables if v.kind == kind)
-
     def vr(self, name: str) -> int:
         """Value reference of the variable called ``name``; KeyError names the unknown variable."""
         for v in self.variables:

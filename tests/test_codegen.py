@@ -102,3 +102,12 @@ def test_plant_functions_compile_with_strict_flags(tmp_path):
     u = np.array([0.5, -0.2, 0.1, 0.05])
     xdot = library.evaluate("ode", [x, u, plant.param_defaults], 1)[0][0]
     np.testing.assert_allclose(xdot, np.array(plant.ode(x, u, plant.param_defaults)).ravel(), rtol=1e-12, atol=1e-12)
+
+
+def test_named_functions_as_dict():
+    from model import load_robot
+
+    funcs = load_robot("planar2r").dynamics.functions
+    named = funcs.as_dict()
+    assert {"inertia", "coriolis", "gravload", "friction", "rne", "accel"} <= set(named)
+    assert all(f.name() == key for key, f in named.items())

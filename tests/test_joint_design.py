@@ -261,3 +261,20 @@ def test_torque_limit_stated_in_the_robot_file_overrides_the_rule(tmp_path):
     lim = torque_limits(robot, reference_task(robot), sample_configurations(robot, 16, seed=0))
     assert lim.tau_m_max[1] == 7.5
     assert lim.tau_m_max[0] != 7.5
+
+
+@pytest.mark.parametrize("plant", PLANTS.values(), ids=PLANTS.keys())
+def test_python_control_views_of_a_loop(plant):
+    """The plant's transfer function is 1/(J s^2 + B s); the closed-loop StateSpace's r -> theta_m
+    channel is Kp / (J s^2 + (B + Kd) s + Kp) (a step reference: the derivative acts on the angle).
+    Tolerance 1e-9 relative: a 2-state complex solve at frequencies within 3 decades of w_n."""
+    loop = design_joint(plant, "pd", bandwidth=40.0, damping=0.7)
+    num, den = (np.ravel(a) for a in control.tfdata(plant.transfer_function()))
+    np.testing.assert_allclose(den / den[0], [1.0, plant.B_m / plant.J_m, 0.0], rtol=1e-12)
+    np.testing.assert_allclose(num / den[0], [1.0 / plant.J_m], rtol=1e-12)
+    cl = loop.closed_loop()
+    assert cl.input_labels == ["r", "d_m"] and cl.output_labels == ["theta_m", "e", "tau_m"]
+    s = 1j * np.array([1.0, 40.0, 300.0])
+    Kp, Kd = loop.gains.Kp, loop.gains.Kd
+    ours = np.array([cl(x)[0, 0] for x in s])
+    np.testing.assert_allclose(ours, Kp / (plant.J_m * s**2 + (plant.B_m + Kd) * s + Kp), rtol=1e-9)
