@@ -39,7 +39,7 @@ from .reference import check_trajectory_limits, task_trajectory
 from .responses import bode_response, step_response
 from .simulate import ProgressLine, TrackingResult, simulate_tracking
 
-__all__ = ["register", "run_design", "run_track", "save_design_plots", "save_tracking_plots"]
+__all__ = ["register", "run_design", "run_track", "save_design_plots", "save_tracking_plots", "write_json"]
 
 _KINDS_TEXT = "{" + ",".join(CONTROLLER_KINDS) + "}"
 
@@ -80,7 +80,8 @@ def _add_spec_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
 
 
-def _write_json(path: Path, data: dict[str, Any]) -> None:
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    """Write ``data`` as indented JSON; NaN or infinity is refused (not valid JSON)."""
     path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n")
 
 
@@ -117,7 +118,7 @@ def run_design(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate)
     out = _out_dir(args.out)
-    _write_json(out / "design.json", design.to_dict())
+    write_json(out / "design.json", design.to_dict())
     assert design.reports is not None
     print(f"{robot.name}: {kind} at {args.bandwidth:g} rad/s, {args.rate:g} Hz "
           f"({'computed-torque outer loops, 1/s^2 and 1/s' if kind == 'ct' else 'motor-side gains, N m/rad and N m s/rad'})")
@@ -164,7 +165,7 @@ def run_track(args: argparse.Namespace) -> int:
         data["exact_plant"] = {"rms_error": nominal.rms_error.tolist(), "max_error": nominal.max_error.tolist(),
                                "peak_motor_torque": nominal.peak_motor_torque.tolist()}
         data["max_error_ratio"] = [float(a / b) if b > 0 else None for a, b in zip(met.max_error, nominal.max_error)]
-    _write_json(out / "metrics.json", data)
+    write_json(out / "metrics.json", data)
     save_tracking_plots(result, out)
     print(f"{robot.name}: {kind} at {args.rate:g} Hz, {mismatch.describe()}, {result.t[-1] - result.t[0]:g} s "
           f"simulated in {met.wall_time:.2f} s")

@@ -9,7 +9,6 @@ compare it with the pure Python closed loop, animate the arm, and write
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
@@ -22,10 +21,11 @@ import numpy as np
 import fmu
 from control_design import design_robot, reference_task, simulate_tracking
 from control_design.reference import reference_task_name
-from control_design.commands import save_design_plots, save_tracking_plots
+from control_design.commands import save_design_plots, save_tracking_plots, write_json
+from control_design.design import RobotDesign
 from control_design.simulate import TrackingResult
 from fmu.master import closed_loop_through_fmu
-from model.robot import Robot, load_robot
+from model.robot import load_robot
 
 from .animation import animate_arm
 from .cli import format_build, format_info
@@ -69,7 +69,7 @@ def _rel(path: Path, out: Path) -> str:
     return path.relative_to(out).as_posix()
 
 
-def _design_section(report: Report, robot: Robot, kind: str, label: str, design, out: Path) -> list[Path]:
+def _design_section(report: Report, kind: str, label: str, design: RobotDesign, out: Path) -> list[Path]:
     report.heading(f"{label} ({kind})", 3)
     assert design.reports is not None
     if kind == "ct":
@@ -88,11 +88,10 @@ def _design_section(report: Report, robot: Robot, kind: str, label: str, design,
                   "GM sampled [dB]", "bandwidth [rad/s]", "rise [s]", "overshoot [%]", "settling [s]"], rows)
     folder = out / f"design_{kind}"
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "design.json").write_text(json.dumps(design.to_dict(), indent=2, default=float))
+    write_json(folder / "design.json", design.to_dict())
     paths = save_design_plots(design, folder)
     for path in paths:
-        if path.name.startswith(("bode_", "step_")):
-            report.image(_rel(path, out), f"{label}: {path.stem.replace('_', ' ', 1)} (continuous and sampled)")
+        report.image(_rel(path, out), f"{label}: {path.stem.replace('_', ' ', 1)} (continuous and sampled)")
     return [folder / "design.json", *paths]
 
 
@@ -148,7 +147,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     designs = {}
     for kind, label in DEMO_CONTROLLERS:
         designs[kind] = design_robot(robot, kind, bandwidth, damping, rate_hz=rate_hz)
-        files += _design_section(report, robot, kind, label, designs[kind], out)
+        files += _design_section(report, kind, label, designs[kind], out)
         progress.note(f"{label}: {len(designs[kind].loops)} loops designed")
 
     progress.step("exporting the plant as an FMI 2.0 FMU (Co-Simulation + Model Exchange)")
@@ -189,7 +188,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
             report.image(_rel(path, out), f"{label}: {path.stem.split('_', 2)[2].replace('_', ' ')}")
         progress.note(f"{label}: max error {np.max(max_error[kind]):.3e}, FMU vs Python {diff:.3e}")
     metrics = {kind: fmu_results[kind].metrics().to_dict() for kind in fmu_results}
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2, default=float))
+    write_json(out / "metrics.json", metrics)
     files.append(out / "metrics.json")
 
     if gif:
