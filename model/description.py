@@ -86,6 +86,14 @@ class LinkDescription:
     rotor_mass: float = 0.0
     # Continuous torque rating of the motor (N m, motor side); None when the file states none.
     torque_limit: float | None = None
+    # The joint coordinate enters negated (theta = -q + theta, or d = -q + d), as the Robotics Toolbox's flip.
+    flip: bool = False
+    # Convention "urdf" only (a, alpha, d, theta are then 0 and unused): the joint frame's pose in the
+    # previous link frame (link 0: frame 0, the robot base), a row-major 4x4 homogeneous transform as
+    # 16 floats, and the unit joint axis in the joint frame. Link frame i is the joint frame moved by
+    # the joint; com and inertia (about the com) are in link frame i.
+    origin: tuple[float, ...] | None = None
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     @property
     def is_revolute(self) -> bool:
@@ -109,6 +117,15 @@ class RobotDescription:
     description: str = ""
     source: str = ""
     path: str = ""
+    # "standard" (A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha)), "modified" (Craig: A_i = Rx(alpha_{i-1})
+    # Tx(a_{i-1}) Rz(theta) Tz(d), com and inertia in frame i at joint i) or "urdf" (see LinkDescription.origin).
+    convention: str = "standard"
+    # Fixed poses as row-major 4x4 transforms (16 floats), None = identity: frame 0 in the world (base),
+    # the tool frame in the tip frame (tool), and for "urdf" the tip link's frame in the last moving
+    # link frame (tip: the fixed joints after the last moving one, merged). gravity is in the world frame.
+    base: tuple[float, ...] | None = None
+    tool: tuple[float, ...] | None = None
+    tip: tuple[float, ...] | None = None
     extra: Mapping[str, Any] = field(default_factory=lambda: types.MappingProxyType({}), compare=False, hash=False)
 
     @property
