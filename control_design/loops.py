@@ -40,6 +40,8 @@ __all__ = [
     "JointPlant",
     "JointGains",
     "JointLoop",
+    "MAX_RATE_HZ",
+    "MAX_RATE_PER_BANDWIDTH",
     "check_rate",
     "gains_arrays",
     "zoh_matrices",
@@ -51,9 +53,22 @@ __all__ = [
 #: clearly degraded; below it the continuous design no longer describes the loop.
 MIN_RATE_PER_BANDWIDTH_HZ = 10.0
 
+#: The sampled analysis (step response, disturbance impulse response) runs over about twelve of the
+#: slowest closed-loop time constants, up to 1 / (0.05 w_n) each at the lowest damping accepted: about
+#: 240 / bandwidth seconds, i.e. 240 rate / bandwidth samples. Capping rate / bandwidth at 1e4 Hz per rad/s
+#: bounds that to 2.4e6 samples (tens of MB, seconds); beyond it the request is refused before any work.
+MAX_RATE_PER_BANDWIDTH = 1.0e4
+
+#: Highest control rate, Hz: the closed-loop simulation keeps every control sample (a 15 s task at
+#: 100 kHz is 1.5e6 samples per signal); faster loops (current loops) are not what this models.
+MAX_RATE_HZ = 1.0e5
+
 
 def check_rate(bandwidth: float, rate_hz: float | None) -> None:
-    """Raise :class:`SamplingRateError` unless ``rate_hz >= 10 * bandwidth / (2 pi)``.
+    """Raise :class:`SamplingRateError` unless ``10 * bandwidth / (2 pi) <= rate_hz <= min(1e4 * bandwidth, 1e5)``.
+
+    The lower bound keeps the continuous design meaningful; the upper bounds keep the sampled analysis
+    and the closed-loop simulation within a few million samples.
 
     Parameters
     ----------
@@ -66,6 +81,18 @@ def check_rate(bandwidth: float, rate_hz: float | None) -> None:
         return
     if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
         raise SamplingRateError(f"rate: expected a positive number of Hz, got {rate_hz!r}")
+    if rate_hz > MAX_RATE_HZ:
+        raise SamplingRateError(
+            f"rate: {rate_hz:g} Hz is above the highest control rate simulated, {MAX_RATE_HZ:g} Hz "
+            "(every control sample is kept)"
+        )
+    if rate_hz > MAX_RATE_PER_BANDWIDTH * bandwidth:
+        raise SamplingRateError(
+            f"bandwidth: {bandwidth:g} rad/s at a control rate of {rate_hz:g} Hz needs about "
+            f"{240.0 * rate_hz / bandwidth:.2g} samples to analyse the sampled loop (limit "
+            f"{240.0 * MAX_RATE_PER_BANDWIDTH:.2g}): raise the bandwidth to >= {rate_hz / MAX_RATE_PER_BANDWIDTH:.3g} rad/s "
+            f"or lower the rate to <= {MAX_RATE_PER_BANDWIDTH * bandwidth:.3g} Hz"
+        )
     need = MIN_RATE_PER_BANDWIDTH_HZ * bandwidth / (2.0 * math.pi)
     if rate_hz < need:
         raise SamplingRateError(

@@ -36,6 +36,7 @@ __all__ = [
     "step_response",
     "disturbance_rejection",
     "frequency_grid",
+    "power_sequence",
 ]
 
 _GRID_POINTS = 3000          # points of the search grid: 6 decades -> 0.2 % spacing
@@ -274,6 +275,33 @@ def _slowest_time_constant(A: np.ndarray, dt: float | None) -> float:
     return 1.0 / sigma
 
 
+def power_sequence(A: np.ndarray, v: np.ndarray, count: int) -> np.ndarray:
+    """``[v, A v, A^2 v, ..., A^(count-1) v]`` as columns of an (len(v), count) array.
+
+    Built by doubling (the next block is ``A^m`` times the block so far), so a sequence of millions of
+    samples costs about log2(count) matrix products instead of a Python loop per sample.
+    """
+    out = np.empty((v.shape[0], count))
+    if count == 0:
+        return out
+    out[:, 0] = v
+    filled, A_m = 1, A  # A_m = A^filled whenever another block follows
+    while filled < count:
+        take = min(filled, count - filled)  # a block shorter than ``filled`` is the last one
+        out[:, filled:filled + take] = A_m @ out[:, :take]
+        filled += take
+        A_m = A_m @ A_m
+    return out
+
+
+def _discrete_step(A: np.ndarray, b: np.ndarray, C: np.ndarray, D: np.ndarray, samples: int) -> np.ndarray:
+    """(rows of C, samples) outputs of ``x+ = A x + b u, y = C x + D u`` for a unit step u from x = 0:
+    ``x_k = sum_{j<k} A^j b``, the cumulative sum of the power sequence."""
+    x = np.zeros((b.shape[0], samples))
+    x[:, 1:] = np.cumsum(power_sequence(A, b, samples - 1), axis=1)
+    return C @ x + D[:, None]
+
+
 def step_response(loop: JointLoop, discrete: bool = False, label: str = "") -> StepResponse:
     """Unit step of the motor-angle reference through the closed loop (continuous or sampled).
 
@@ -284,17 +312,17 @@ def step_response(loop: JointLoop, discrete: bool = False, label: str = "") -> S
     A, B, C, D = loop.closed_loop_matrices(discrete)
     dt = loop.period() if discrete else None
     t_end = 10.0 * _slowest_time_constant(A, dt)
-    sys = control.ss(A, B[:, :1], C[[0, 2], :], D[[0, 2], :1], dt if discrete else 0)
     if discrete:
         t = np.arange(0, int(math.ceil(t_end / dt)) + 1) * dt
+        y = _discrete_step(A, B[:, 0], C[[0, 2], :], D[[0, 2], 0], t.size)
     else:
         t = np.linspace(0.0, t_end, 5001)
-    resp = control.step_response(sys, timepts=t)
-    y = np.asarray(resp.outputs)
-    theta, tau = y[0].reshape(-1), y[1].reshape(-1)
+        resp = control.step_response(control.ss(A, B[:, :1], C[[0, 2], :], D[[0, 2], :1]), timepts=t)
+        y = np.asarray(resp.outputs).reshape(2, -1)
+    theta, tau = y[0], y[1]
     dc = float(loop.evaluate(np.array([0.0]), "closed", discrete)[0].real)  # exact final value, not the last sample
-    info = control.step_info(theta, timepts=resp.time, final_output=dc, SettlingTimeThreshold=0.02, RiseTimeLimits=(0.1, 0.9))
-    return StepResponse(t=np.asarray(resp.time), theta_m=theta, tau_m=tau, rise_time=float(info["RiseTime"]),
+    info = control.step_info(theta, timepts=t, final_output=dc, SettlingTimeThreshold=0.02, RiseTimeLimits=(0.1, 0.9))
+    return StepResponse(t=t, theta_m=theta, tau_m=tau, rise_time=float(info["RiseTime"]),
                         settling_time=float(info["SettlingTime"]), overshoot=float(info["Overshoot"]),
                         peak_tau_m=float(np.max(np.abs(tau))), dt=dt,
                         label=label or f"{loop.plant.name} ({loop.kind})")
@@ -313,11 +341,8 @@ def disturbance_rejection(loop: JointLoop, discrete: bool = False) -> Disturbanc
     t_end = 12.0 * _slowest_time_constant(A, dt)
     if discrete:
         h = np.empty(int(math.ceil(t_end / dt)) + 1)
-        x = b.copy()
         h[0] = 0.0  # D[1, 1] = 0: the held disturbance shows one sample later
-        for k in range(1, h.size):
-            h[k] = c @ x
-            x = A @ x
+        h[1:] = c @ power_sequence(A, b, h.size - 1)
         l1 = float(np.sum(np.abs(h)))
     else:
         # h(t) = c expm(A t) b, propagated exactly on a uniform grid of 20000 steps.
