@@ -366,7 +366,7 @@ def _pose(w: _Where, key: str, value: Any) -> tuple[float, ...] | None:
     T = np.eye(4)
     T[:3, :3] = rpy_matrix(rpy)
     T[:3, 3] = xyz
-    return tuple(float(v) for v in T.ravel())
+    return tuple(float(v) + 0.0 for v in T.ravel())  # + 0.0: no -0.0, one digest per pose
 
 
 def _units(w: _Where, value: Any) -> Mapping[str, str]:
