@@ -101,7 +101,7 @@ def build_plant(robot: Robot) -> Plant:
     )
     out_units = pos_unit + vel_unit + ["rad"] * n + ["m"] * 3 + ["rad"] * 3
     return Plant(
-        name=robot.name,
+        name=robot.description.identifier,
         n=n,
         nx=2 * n,
         nu=n,
