@@ -50,7 +50,7 @@ __all__ = [
 ]
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
-BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560")
+BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560", "panda", "ur5")
 JOINT_TYPES = ("revolute", "prismatic")
 
 
@@ -323,7 +323,7 @@ def load_description(name_or_path: str | Path) -> RobotDescription:
         path = Path(name_or_path)
         if not path.is_file():
             raise RobotDescriptionError(
-                f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) a TOML file path; no such file"
+                f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; no such file"
             )
     if path.suffix.lower() == ".urdf":
         from .urdf import description_from_urdf
