@@ -38,6 +38,8 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 __all__ = [
+    "CONVENTIONS",
+    "SI_UNITS",
     "LinkDescription",
     "RobotDescription",
     "RobotDescriptionError",
@@ -47,11 +49,29 @@ __all__ = [
     "BUILTIN_DIR",
     "BUILTIN_ROBOTS",
     "JOINT_TYPES",
+    "identifier_from_name",
+    "pose_matrix",
+    "rpy_matrix",
 ]
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
 BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560", "panda", "ur5")
 JOINT_TYPES = ("revolute", "prismatic")
+CONVENTIONS = ("standard", "modified", "urdf")
+#: The accepted spellings of the ``[units]`` table: SI only, one entry per quantity.
+SI_UNITS: dict[str, tuple[str, ...]] = {
+    "length": ("m",),
+    "angle": ("rad",),
+    "mass": ("kg",),
+    "time": ("s",),
+    "force": ("N",),
+    "torque": ("N m", "N.m", "Nm"),
+    "inertia": ("kg m^2", "kg.m2", "kg m2", "kg*m^2"),
+    "velocity": ("m/s",),
+    "angular_velocity": ("rad/s",),
+    "acceleration": ("m/s^2", "m/s2"),
+    "viscous_friction": ("N m s/rad", "N.m.s/rad"),
+}
 
 
 class RobotDescriptionError(ValueError):
@@ -133,6 +153,27 @@ class RobotDescription:
         return len(self.links)
 
     @property
+    def identifier(self) -> str:
+        """A C- and file-safe identifier derived from :attr:`name` (e.g. ``"Puma 560 (Unimation)"`` ->
+        ``"Puma_560_Unimation"``): ASCII letters, digits and ``_``, never empty, never starting with a digit."""
+        return identifier_from_name(self.name)
+
+    @property
+    def tasks(self) -> tuple[Mapping[str, Any], ...]:
+        """The ``[[tasks]]`` entries of the file, validated (name, waypoints, segment_time, labels, description)."""
+        return tuple(self.extra.get("tasks", ()))
+
+    @property
+    def T_base(self) -> np.ndarray:
+        """(4, 4) pose of frame 0 in the world frame."""
+        return pose_matrix(self.base)
+
+    @property
+    def T_tool(self) -> np.ndarray:
+        """(4, 4) pose of the tool frame in the tip frame (DH frame n)."""
+        return pose_matrix(self.tool)
+
+    @property
     def q_rest(self) -> np.ndarray:
         """Rest configuration (m or rad per joint); zeros if the file gives none."""
         return np.zeros(self.n) if self.rest is None else np.array(self.rest, dtype=float)
@@ -152,6 +193,7 @@ class RobotDescription:
     def digest(self) -> str:
         """SHA-256 of the physical content (not name/path/metadata): the cache key of generated code."""
         payload = {
+            "convention": self.convention, "base": self.base, "tool": self.tool, "tip": self.tip,
             "gravity": self.gravity,
             "links": [
                 {k: v for k, v in dataclasses.asdict(lk).items() if k not in ("name", "qlim", "torque_limit")}
@@ -162,16 +204,45 @@ class RobotDescription:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
+def identifier_from_name(name: str) -> str:
+    """A C- and file-safe identifier from any text: runs of other characters become one ``_``.
+
+    ``"Puma 560 (Unimation)"`` -> ``"Puma_560_Unimation"``; ``"6-axis"`` -> ``"r_6_axis"``; ``"?"`` -> ``"robot"``.
+    """
+    ident = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
+    if not ident:
+        return "robot"
+    return f"r_{ident}" if ident[0].isdigit() else ident
+
+
+def pose_matrix(pose: Sequence[float] | None) -> np.ndarray:
+    """(4, 4) homogeneous transform from 16 row-major floats; identity for None."""
+    return np.eye(4) if pose is None else np.array(pose, dtype=float).reshape(4, 4)
+
+
+def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
+    """(3, 3) rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` of ``rpy = [roll, pitch, yaw]`` (rad), as URDF."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ])
+
+
 # --------------------------------------------------------------------------- parsing
 
 _TOP_REQUIRED = ("name", "links")
-_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
-_TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks")
+_TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks", "convention", "base", "tool")
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
     "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
-    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source",
+    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source", "flip",
 )
+_POSE_KEYS = ("xyz", "rpy")
+_TASK_REQUIRED = ("name", "waypoints")
+_TASK_OPTIONAL = ("segment_time", "labels", "description")
 
 
 class _Where:
@@ -274,7 +345,83 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription:
         if limit <= 0:
             raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
         kw["torque_limit"] = limit
+    if "flip" in data:
+        if not isinstance(data["flip"], bool):
+            raise w.fail(i, "flip", data["flip"], "true or false")
+        kw["flip"] = data["flip"]
     return LinkDescription(**kw)
+
+
+def _pose(w: _Where, key: str, value: Any) -> tuple[float, ...] | None:
+    """``{xyz = [...], rpy = [...]}`` (m, rad) as 16 row-major floats; None for the identity."""
+    if not isinstance(value, Mapping):
+        raise w.fail(None, key, value, "a table {xyz = [x, y, z], rpy = [roll, pitch, yaw]} (m, rad)")
+    for k in value:
+        if k not in _POSE_KEYS:
+            raise w.fail(None, f"{key}.{k}", value[k], "one of the known keys (xyz, rpy); this key is unknown")
+    xyz = _vector(w, None, f"{key}.xyz", value.get("xyz", [0.0, 0.0, 0.0]), 3)
+    rpy = _vector(w, None, f"{key}.rpy", value.get("rpy", [0.0, 0.0, 0.0]), 3)
+    if not any(xyz) and not any(rpy):
+        return None
+    T = np.eye(4)
+    T[:3, :3] = rpy_matrix(rpy)
+    T[:3, 3] = xyz
+    return tuple(float(v) for v in T.ravel())
+
+
+def _units(w: _Where, value: Any) -> Mapping[str, str]:
+    if not isinstance(value, Mapping):
+        raise w.fail(None, "units", value, "a table of quantity = SI unit")
+    for key, unit in value.items():
+        if key not in SI_UNITS:
+            raise w.fail(None, f"units.{key}", unit, f"one of the known quantities ({', '.join(SI_UNITS)}); this key is unknown")
+        if unit not in SI_UNITS[key]:
+            spellings = " or ".join(repr(u) for u in SI_UNITS[key])
+            raise w.fail(None, f"units.{key}", unit, f"the SI unit {spellings}: robot files are in SI units only")
+    return dict(value)
+
+
+def _task(w: _Where, k: int, data: Any, links: Sequence[LinkDescription], names: set[str]) -> Mapping[str, Any]:
+    where = f"tasks[{k + 1}]"
+    if not isinstance(data, Mapping):
+        raise w.fail(None, where, data, "a [[tasks]] table")
+    for key in _TASK_REQUIRED:
+        if key not in data:
+            raise w.fail(None, f"{where}.{key}", None, "this required key (it is missing)")
+    for key in data:
+        if key not in _TASK_REQUIRED and key not in _TASK_OPTIONAL:
+            allowed = ", ".join((*_TASK_REQUIRED, *_TASK_OPTIONAL))
+            raise w.fail(None, f"{where}.{key}", data[key], f"one of the known keys ({allowed}); this key is unknown")
+    name = data["name"]
+    if not isinstance(name, str) or not name.strip():
+        raise w.fail(None, f"{where}.name", name, "a non-empty string")
+    if name in names:
+        raise w.fail(None, f"{where}.name", name, "a task name not used by another [[tasks]] entry")
+    names.add(name)
+    rows = data["waypoints"]
+    if not isinstance(rows, list) or len(rows) < 2:
+        raise w.fail(None, f"{where}.waypoints", rows, f"a list of at least 2 joint vectors of {len(links)} values")
+    waypoints = []
+    for r, row in enumerate(rows, 1):
+        vec = _vector(w, None, f"{where}.waypoints[{r}]", row, len(links))
+        for j, (x, link) in enumerate(zip(vec, links)):
+            if link.qlim is not None and not link.qlim[0] <= x <= link.qlim[1]:
+                raise w.fail(j, f"{where}.waypoints[{r}]", x, f"a joint value within qlim [{link.qlim[0]}, {link.qlim[1]}]")
+        waypoints.append(vec)
+    out: dict[str, Any] = {"name": name, "waypoints": tuple(waypoints)}
+    segment_time = _number(w, None, f"{where}.segment_time", data.get("segment_time", 3.0))
+    if segment_time <= 0:
+        raise w.fail(None, f"{where}.segment_time", data["segment_time"], "a duration > 0 (s)")
+    out["segment_time"] = segment_time
+    labels = data.get("labels", [f"waypoint {r}" for r in range(len(rows))])
+    if not isinstance(labels, list) or len(labels) != len(rows) or not all(isinstance(x, str) for x in labels):
+        raise w.fail(None, f"{where}.labels", labels, f"a list of {len(rows)} strings, one per waypoint")
+    out["labels"] = tuple(labels)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise w.fail(None, f"{where}.description", description, "a string")
+    out["description"] = description
+    return types.MappingProxyType(out)
 
 
 def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescription:
@@ -290,8 +437,11 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
         raise w.fail(None, "<document>", data, "a TOML table")
     _check_keys(w, None, data, _TOP_REQUIRED, _TOP_OPTIONAL)
     name = data["name"]
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise w.fail(None, "name", name, "a non-empty name of letters, digits, '_', '-' and '.' (it names generated files)")
+    if not isinstance(name, str) or not name.strip():
+        raise w.fail(None, "name", name, "a non-empty string")
+    convention = data.get("convention", "standard")
+    if convention not in ("standard", "modified"):
+        raise w.fail(None, "convention", convention, "'standard' or 'modified' (URDF robots are read from a .urdf file)")
     raw_links = data["links"]
     if not isinstance(raw_links, list) or not raw_links:
         raise w.fail(None, "links", raw_links, "at least one [[links]] table")
@@ -306,11 +456,21 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
     for key in ("description", "source"):
         if key in data and not isinstance(data[key], str):
             raise w.fail(None, key, data[key], "a string")
-    extra = types.MappingProxyType({k: data[k] for k in ("units", "tasks") if k in data})
+    base = _pose(w, "base", data["base"]) if "base" in data else None
+    tool = _pose(w, "tool", data["tool"]) if "tool" in data else None
+    extra: dict[str, Any] = {}
+    if "units" in data:
+        extra["units"] = _units(w, data["units"])
+    if "tasks" in data:
+        if not isinstance(data["tasks"], list):
+            raise w.fail(None, "tasks", data["tasks"], "a list of [[tasks]] tables")
+        names: set[str] = set()
+        extra["tasks"] = tuple(_task(w, k, t, links, names) for k, t in enumerate(data["tasks"]))
     return RobotDescription(
         name=name, links=links, gravity=gravity, rest=rest,  # type: ignore[arg-type]
         description=data.get("description", ""), source=data.get("source", ""),
-        path=str(path), extra=extra,
+        path=str(path), convention=convention, base=base, tool=tool,
+        extra=types.MappingProxyType(extra),
     )
 
 

@@ -5,8 +5,12 @@ Kinetic energy ``T = 1/2 qd^T B(q) qd`` with::
     B(q) = sum_i  m_i J_v,Ci^T J_v,Ci + J_w,i^T R_0i I_i R_0i^T J_w,i      (links, payload on link n)
            + rotor terms (see :mod:`model.dynamics.motors`)
 
-``J_v,Ci`` is the linear Jacobian of the centre of mass ``p_0Ci = p_0i + R_0i c_i``,
-``J_w,i`` the angular Jacobian of link i, both in base-frame axes. The
+Body i is body i of the chain (:mod:`model.chain`): ``R_0i``, ``p_0i`` its
+frame in frame 0, ``c_i``, ``I_i`` its centre of mass and inertia in that
+frame. ``J_v,Ci`` is the linear Jacobian of the centre of mass
+``p_0Ci = p_0i + R_0i c_i``, ``J_w,i`` the angular Jacobian of body i, both in
+frame-0 axes; gravity (world frame) enters as ``g_0 = R_W0^T g``. The payload
+is a body fixed to the tip frame (DH frame n), its com and inertia in that frame. The
 Christoffel symbols of the first kind
 ``c_ijk = 1/2 (db_ij/dq_k + db_ik/dq_j - db_jk/dq_i)`` summed with ``qd_k``
 give ``C = 1/2 (Bdot + D - D^T)`` where ``D = d(B qd)/dq``; this is the C for
@@ -22,12 +26,13 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..chain import build_chain
 from ..description import RobotDescription
-from ..kinematics import fkine_all_sym, jacob0_sym
+from ..kinematics import chain_frames_sym, point_jacobian_sym
 from .motors import rotor_energy_terms
 from .parameters import SymbolicParameters, inertia_matrix_sx
 
-__all__ = ["LagrangeModel", "lagrange_model", "christoffel_coriolis"]
+__all__ = ["LagrangeModel", "lagrange_model", "christoffel_coriolis", "gravity_in_frame0"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +84,12 @@ def _body_terms(m: Any, c_i: Any, I_i: Any, T_0i: ca.SX, J_v: ca.SX, J_w: ca.SX,
     return B, U
 
 
+def gravity_in_frame0(base: np.ndarray, gravity: Any) -> Any:
+    """Gravity (3 x 1, world frame, m/s^2) in frame-0 axes: ``R_W0^T g``; unchanged without a base rotation."""
+    R = np.asarray(base, dtype=float)[:3, :3]
+    return gravity if np.array_equal(R, np.eye(3)) else ca.DM(R.T) @ gravity
+
+
 def lagrange_model(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX, params: SymbolicParameters) -> LagrangeModel:
     """Build B, C, g and the energies of ``desc`` symbolically.
 
@@ -94,27 +105,31 @@ def lagrange_model(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX
         Symbolic payload and gravity (friction is not part of the Lagrangian).
     """
     n = desc.n
-    frames = fkine_all_sym(desc, q)
+    chain = build_chain(desc)
+    frames = chain_frames_sym(chain, q)
     J_v = [ca.SX.zeros(3, n)]
     J_w = [ca.SX.zeros(3, n)]
     for k in range(1, n + 1):
-        J_k = jacob0_sym(desc, frames, upto=k)
+        J_k = point_jacobian_sym(chain, frames, frames.body[k][0:3, 3], upto=k)
         J_v.append(J_k[0:3, :])
         J_w.append(J_k[3:6, :])
-    gravity = params.gravity
+    gravity = gravity_in_frame0(chain.base, params.gravity)
     B = ca.SX.zeros(n, n)
     U = ca.SX(0)
-    for k, link in enumerate(desc.links, start=1):
-        if link.mass == 0 and not np.any(link.inertia):
+    for k in range(1, n + 1):
+        m, c, I = chain.mass[k - 1], chain.com[k - 1], chain.inertia[k - 1]
+        if m == 0 and not np.any(I):
             continue
-        B_k, U_k = _body_terms(link.mass, ca.DM(link.com), ca.DM(link.inertia_matrix), frames[k], J_v[k], J_w[k], gravity)
+        B_k, U_k = _body_terms(m, ca.DM(c), ca.DM(I), frames.body[k], J_v[k], J_w[k], gravity)
         B += B_k
         U += U_k
+    T_tip = frames.body[n] @ ca.DM(chain.tip)
+    J_tip = point_jacobian_sym(chain, frames, T_tip[0:3, 3], upto=n)
     B_p, U_p = _body_terms(
         params.payload_mass, params.payload_com, inertia_matrix_sx(params.payload_inertia),
-        frames[n], J_v[n], J_w[n], gravity,
+        T_tip, J_tip[0:3, :], J_w[n], gravity,
     )
-    B_m, U_m = rotor_energy_terms(desc, motor_model, frames, J_v, J_w, gravity)
+    B_m, U_m = rotor_energy_terms(desc, motor_model, chain, frames, J_w, gravity)
     B = B + B_p + B_m
     U = U + U_p + U_m
     C = christoffel_coriolis(B, q, qd)

@@ -6,11 +6,12 @@ Two motor models (``MOTOR_MODELS``):
     The Robotics Toolbox convention: rotor i only adds ``G_i^2 Jm_i`` to the
     diagonal of B(q); its mass is assumed lumped into the link data.
 ``"full"``
-    Rotor i is a body carried by link i-1 (the base for i = 1), centred on
-    joint axis i at the origin of frame i-1, mass ``rotor_mass_i``, inertia
-    ``Jm_i`` about its spin axis and no transverse inertia. Its angular
-    velocity is ``w_{i-1} + G_i qd_i z_{i-1}``, which gives the off-diagonal
-    ``G_i Jm_i z_{i-1}^T J_w,i-1`` terms of B(q).
+    Rotor i is a body carried by body i-1 of the chain (:mod:`model.chain`;
+    the base for i = 1), centred on joint axis i at the origin of the joint-i
+    frame (DH frame i-1 for standard DH), mass ``rotor_mass_i``, inertia
+    ``Jm_i`` about its spin axis ``a_i`` (the joint axis) and no transverse
+    inertia. Its angular velocity is ``w_{i-1} + G_i qd_i a_i``, which gives the
+    off-diagonal ``G_i Jm_i a_i^T J_w,i-1`` terms of B(q).
 
 Friction (both models) is motor-side data reflected to the joint:
 ``F_i(qd) = G_i^2 B_i qd_i + |G_i| Tc_i(sign qd_i)`` with ``Tc+`` for
@@ -25,7 +26,9 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 
+from ..chain import Chain
 from ..description import RobotDescription
+from ..kinematics import point_jacobian_sym
 
 __all__ = ["MOTOR_MODELS", "check_motor_model", "friction_sx", "rotor_energy_terms"]
 
@@ -61,8 +64,8 @@ def friction_sx(gear_ratio: np.ndarray, qd: Any, viscous: Any, coulomb_pos: Any,
 def rotor_energy_terms(
     desc: RobotDescription,
     motor_model: str,
-    frames: Sequence[ca.SX],
-    J_v: Sequence[ca.SX],
+    chain: Chain,
+    frames: Any,
     J_w: Sequence[ca.SX],
     gravity: Any,
 ) -> tuple[ca.SX, ca.SX]:
@@ -70,13 +73,12 @@ def rotor_energy_terms(
 
     Parameters
     ----------
-    frames
-        ``[T_00, ..., T_0n]`` link frames in the base frame.
-    J_v, J_w
-        For k = 0..n, the (3, n) linear Jacobian of the origin of frame k and
-        the (3, n) angular Jacobian of link k (k = 0: the base, zeros), base axes.
+    chain, frames
+        The chain of ``desc`` and its symbolic frames (:func:`model.kinematics.chain_frames_sym`), frame 0.
+    J_w
+        For k = 0..n, the (3, n) angular Jacobian of body k (k = 0: the base, zeros), frame-0 axes.
     gravity
-        (3, 1) gravitational acceleration in the base frame, m/s^2.
+        (3, 1) gravitational acceleration in frame-0 axes, m/s^2.
 
     Returns
     -------
@@ -92,15 +94,17 @@ def rotor_energy_terms(
         return ca.SX(ca.DM(np.diag(G * G * Jm))), ca.SX(0)
     B_m = ca.SX.zeros(n, n)
     U_m = ca.SX(0)
-    for i, link in enumerate(desc.links):  # rotor i+1 (1-based) sits on frame i (0-based list index)
-        z_0k = frames[i][0:3, 2]
-        p_0k = frames[i][0:3, 3]
-        spin_row = z_0k.T @ J_w[i]  # (1, n): z_{i} . w_{i} per joint rate
+    for i, link in enumerate(desc.links):  # rotor of joint i (0-based) rides on body i, at the joint-i frame
+        J = frames.joint[i]
+        a_0 = J[0:3, 0:3] @ ca.DM(chain.axes[i])
+        spin_row = a_0.T @ J_w[i]  # (1, n): a . w_{body i} per joint rate
         e_i = ca.DM.zeros(1, n)
         e_i[i] = G[i]
         a_row = spin_row + e_i  # rotor spin rate about its axis, per joint rate
         B_m += Jm[i] * (a_row.T @ a_row)
         if link.rotor_mass:
-            B_m += link.rotor_mass * (J_v[i].T @ J_v[i])
-            U_m -= link.rotor_mass * (gravity.T @ p_0k)
+            p_0 = J[0:3, 3]
+            J_v = point_jacobian_sym(chain, frames, p_0, upto=i)[0:3, :]
+            B_m += link.rotor_mass * (J_v.T @ J_v)
+            U_m -= link.rotor_mass * (gravity.T @ p_0)
     return B_m, U_m
