@@ -1,12 +1,10 @@
 """Robots to URDF: any :class:`~model.description.RobotDescription` written as a URDF file.
 
-Each joint becomes a URDF joint whose frame is where the joint moves: for standard DH the
-frame of the previous DH frame (the motion ``Rz(q)`` or ``Tz(q)`` comes first in ``A_i``),
-so the constant rest of ``A_i`` moves to the next joint's origin and the inertial data
-of link i are carried over to that frame; for modified DH the motion comes last and the
-URDF link frame is DH frame i itself. ``flip`` reverses the axis, ``base`` becomes a fixed
-joint from a ``world`` link, the tip and the tool fixed joints to the leaves ``flange``
-and ``tool``. Joint limits become ``<limit>`` (a revolute joint without limits is
+The description's :class:`~model.chain.Chain` is already URDF's picture (joint placements,
+unit axes, bodies in the moved joint frames): each joint becomes a URDF joint with that
+placement as ``<origin>`` and that axis (flip applied), each body a link ``<inertial>``.
+``base`` becomes a fixed joint from a ``world`` link, the tip and the tool fixed joints to
+the leaves ``flange`` and ``tool``. Joint limits become ``<limit>`` (a revolute joint without limits is
 ``continuous``, a prismatic one gets lower = upper = 0, which reads back as no limit).
 
 URDF has no place for motor data or gravity: :func:`companion_toml` writes the robot
@@ -16,58 +14,16 @@ TOML that points at the URDF and restores them, so that URDF + TOML is the same 
 from __future__ import annotations
 
 import json
-import math
 import os
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from .description import RobotDescription, pose_matrix
+from .chain import build_chain
+from .description import RobotDescription
 
-__all__ = ["urdf_joints", "urdf_text", "companion_toml", "write_atomic", "export_urdf"]
-
-
-def _dh_constant(a: float, alpha: float, d: float, theta: float) -> np.ndarray:
-    """``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` as a 4x4 array."""
-    ct, st, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
-    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0.0, sa, ca, d], [0.0, 0.0, 0.0, 1.0]])
-
-
-def _mdh_constant(a: float, alpha: float, d: float, theta: float) -> np.ndarray:
-    """``Rx(alpha) Tx(a) Rz(theta) Tz(d)`` (Craig's modified DH, link i holding alpha_{i-1} and a_{i-1})."""
-    ct, st, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
-    return np.array([[ct, -st, 0.0, a], [ca * st, ca * ct, -sa, -sa * d], [sa * st, sa * ct, ca, ca * d], [0.0, 0.0, 0.0, 1.0]])
-
-
-def urdf_joints(desc: RobotDescription) -> tuple[list[dict], np.ndarray]:
-    """Per joint the URDF data ``origin`` (4, 4, in the previous URDF link frame), ``axis``, ``mass``,
-    ``com`` (m) and ``inertia`` (3, 3 about the com, kg m^2) in the URDF link frame; and the tip's pose
-    (4, 4) in the last URDF link frame. The base and the tool are not included."""
-    out = []
-    if desc.convention == "standard":
-        constants = [_dh_constant(lk.a, lk.alpha, lk.d, lk.theta) for lk in desc.links]
-        origins = [np.eye(4), *constants[:-1]]
-        to_link = constants  # DH frame i in URDF link frame i
-        tip = constants[-1]
-    elif desc.convention == "modified":
-        origins = [_mdh_constant(lk.a, lk.alpha, lk.d, lk.theta) for lk in desc.links]
-        to_link = [np.eye(4)] * desc.n
-        tip = np.eye(4)
-    elif desc.convention == "urdf":
-        origins = [pose_matrix(lk.origin) for lk in desc.links]
-        to_link = [np.eye(4)] * desc.n
-        tip = pose_matrix(desc.tip)
-    else:
-        raise ValueError(f"{desc.path or desc.name}: convention {desc.convention!r}: expected standard, modified or urdf")
-    for link, origin, M in zip(desc.links, origins, to_link):
-        axis = np.array(link.axis if desc.convention == "urdf" else (0.0, 0.0, 1.0), dtype=float)
-        R = M[:3, :3]
-        out.append({
-            "origin": origin, "axis": -axis if link.flip else axis, "mass": link.mass,
-            "com": R @ np.array(link.com, dtype=float) + M[:3, 3], "inertia": R @ link.inertia_matrix @ R.T,
-        })
-    return out, tip
+__all__ = ["urdf_text", "companion_toml", "write_atomic", "export_urdf"]
 
 
 def _joint_names(desc: RobotDescription) -> list[str]:
@@ -81,20 +37,21 @@ def _joint_names(desc: RobotDescription) -> list[str]:
 def urdf_text(desc: RobotDescription) -> str:
     """The URDF XML of ``desc``: links ``base_link``, ``link1``..``linkN``, ``flange`` (the tip), ``tool``
     if the description has one, ``world`` if it has a base pose; inertials and limits included."""
+    from lxml import etree
     from yourdfpy import URDF, Inertial, Joint, Limit, Link, Robot
 
-    specs, tip = urdf_joints(desc)
+    chain = build_chain(desc)
     links = [Link(name="base_link")]
     joints = []
     if desc.base is not None:
         links.insert(0, Link(name="world"))
-        joints.append(Joint(name="base_joint", type="fixed", parent="world", child="base_link", origin=pose_matrix(desc.base)))
+        joints.append(Joint(name="base_joint", type="fixed", parent="world", child="base_link", origin=chain.base))
     parent = "base_link"
-    for i, (name, link, spec) in enumerate(zip(_joint_names(desc), desc.links, specs), 1):
-        child = f"link{i}"
-        origin = np.eye(4)
-        origin[:3, 3] = spec["com"]
-        links.append(Link(name=child, inertial=Inertial(origin=origin, mass=float(spec["mass"]), inertia=spec["inertia"])))
+    for i, (name, link) in enumerate(zip(_joint_names(desc), desc.links)):
+        child = f"link{i + 1}"
+        com = np.eye(4)
+        com[:3, 3] = chain.com[i]
+        links.append(Link(name=child, inertial=Inertial(origin=com, mass=float(chain.mass[i]), inertia=chain.inertia[i])))
         effort = 0.0 if link.torque_limit is None else abs(link.gear_ratio) * link.torque_limit
         if link.qlim is not None:
             kind, limit = link.joint, Limit(effort=effort, velocity=0.0, lower=link.qlim[0], upper=link.qlim[1])
@@ -102,16 +59,17 @@ def urdf_text(desc: RobotDescription) -> str:
             kind, limit = "continuous", None
         else:
             kind, limit = "prismatic", Limit(effort=effort, velocity=0.0, lower=0.0, upper=0.0)
-        joints.append(Joint(name=name, type=kind, parent=parent, child=child, origin=spec["origin"], axis=spec["axis"], limit=limit))
+        joints.append(Joint(name=name, type=kind, parent=parent, child=child, origin=chain.placements[i],
+                            axis=chain.axes[i], limit=limit))
         parent = child
     links.append(Link(name="flange"))
-    joints.append(Joint(name="flange_joint", type="fixed", parent=parent, child="flange", origin=tip))
+    joints.append(Joint(name="flange_joint", type="fixed", parent=parent, child="flange", origin=chain.tip))
     if desc.tool is not None:
         links.append(Link(name="tool"))
-        joints.append(Joint(name="tool_joint", type="fixed", parent="flange", child="tool", origin=pose_matrix(desc.tool)))
+        joints.append(Joint(name="tool_joint", type="fixed", parent="flange", child="tool", origin=chain.tool))
     robot = Robot(name=desc.name, links=links, joints=joints)
     urdf = URDF(robot=robot, build_scene_graph=False, load_meshes=False)
-    return urdf.write_xml_string().decode()
+    return etree.tostring(urdf.write_xml(), pretty_print=True, xml_declaration=True, encoding="UTF-8").decode()
 
 
 def _toml_number(x: float) -> str:
