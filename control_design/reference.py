@@ -1,10 +1,10 @@
 """Reference motions: the task a robot is designed and checked on, and the references a controller reads.
 
-* :func:`reference_task` - the robot's reference task: the seed's pick-and-place
-  for the SCARA; for any other robot a deterministic tour
-  ``rest -> 25 % of every joint range -> 75 % -> rest`` (ranges without limits
-  taken as [-pi, pi] rad or [-1, 1] m), quintic segments stopping at each point.
-* :func:`task_trajectory` - what ``manip track`` follows: a built-in task or a waypoint file.
+* :func:`reference_task` - the motion a design is made on: the first ``[[tasks]]``
+  entry of the robot file (the SCARA's is the seed's pick-and-place); a robot
+  without tasks is designed on the generic tour (:func:`model.tasks.tour`).
+* :func:`task_trajectory` - what ``manip track`` follows: a task of the robot file,
+  ``"tour"``, or a waypoint file.
 * :class:`Reference` - desired q, qd, qdd (joint side) at one instant, as a controller reads it.
 """
 
@@ -17,8 +17,9 @@ from typing import NamedTuple
 import numpy as np
 
 from model.robot import Robot
-from model.tasks import BUILTIN_TASKS, load_waypoints, pick_and_place
-from model.trajectory import Trajectory, via_points
+from model import tasks as _tasks
+from model.tasks import find_task, load_waypoints
+from model.trajectory import Trajectory
 
 from .errors import TrajectoryLimitError
 
@@ -46,33 +47,22 @@ class Reference(NamedTuple):
 
 def finite_limits(robot: Robot) -> np.ndarray:
     """(2, n) joint limits with unlimited joints bounded to [-pi, pi] rad or [-1, 1] m."""
-    lim = robot.qlim.copy()
-    for j, link in enumerate(robot.description.links):
-        span = math.pi if link.is_revolute else 1.0
-        if not math.isfinite(lim[0, j]):
-            lim[0, j] = -span
-        if not math.isfinite(lim[1, j]):
-            lim[1, j] = span
-    return lim
+    return _tasks.finite_limits(robot.description)
 
 
 def reference_task_name(robot: Robot) -> str:
-    """Name of :func:`reference_task` for ``robot``: 'pick_and_place' or 'tour'."""
-    return "pick_and_place" if robot.name == "scara" and robot.n == 4 else "tour"
+    """Name of :func:`reference_task` for ``robot``: its file's first task, else ``"tour"``."""
+    tasks = robot.description.tasks
+    return tasks[0]["name"] if tasks else _tasks.TOUR
 
 
 def reference_task(robot: Robot, segment_time: float = DEFAULT_SEGMENT_TIME, dt: float = 0.01) -> Trajectory:
     """The robot's reference task, sampled every ``dt`` s (see the module docstring)."""
-    if reference_task_name(robot) == "pick_and_place":
-        return pick_and_place(robot.description, segment_time=segment_time, dt=dt)
-    lim = finite_limits(robot)
-    rest = np.clip(robot.q_rest, lim[0], lim[1])
-    a = lim[0] + 0.25 * (lim[1] - lim[0])
-    b = lim[0] + 0.75 * (lim[1] - lim[0])
-    return via_points(np.vstack([rest, a, b, rest]), segment_time, dt)
+    task = find_task(robot.description, reference_task_name(robot))
+    return task.trajectory(dt=dt, segment_time=segment_time)
 
 
-def task_trajectory(robot: Robot, task: str | None = "pick-and-place", waypoints: str | Path | None = None,
+def task_trajectory(robot: Robot, task: str | None = None, waypoints: str | Path | None = None,
                     segment_time: float | None = None, dt: float = 0.01) -> Trajectory:
     """The trajectory ``manip track`` follows.
 
@@ -81,11 +71,12 @@ def task_trajectory(robot: Robot, task: str | None = "pick-and-place", waypoints
     robot
         The robot (waypoints are checked against its joint count and limits).
     task
-        'pick-and-place' (or 'pick_and_place'): the robot's reference task; ignored when ``waypoints`` is given.
+        A task of the robot file (``-`` and ``_`` alike, e.g. 'pick-and-place') or 'tour'
+        (:func:`model.tasks.tour`); None: the robot's reference task. Ignored when ``waypoints`` is given.
     waypoints
         A TOML or CSV waypoint file (see :func:`model.tasks.load_waypoints`).
     segment_time
-        Segment duration, s (default: the file's, else :data:`DEFAULT_SEGMENT_TIME`).
+        Segment duration, s (default: the task's or the waypoint file's, else 3 s).
     dt
         Largest sampling period of the returned samples, s, shortened if needed to divide the
         segment time (the controller evaluates the path itself at its own instants).
@@ -99,11 +90,9 @@ def task_trajectory(robot: Robot, task: str | None = "pick-and-place", waypoints
     if waypoints is not None:
         t = load_waypoints(waypoints, robot.description, segment_time)
         return t.trajectory(dt=_grid_step(t.segment_time, dt))
-    name = (task or "pick-and-place").replace("-", "_")
-    if name != "pick_and_place" and name not in BUILTIN_TASKS:
-        raise ValueError(f"task: expected 'pick-and-place' or a waypoint file, got {task!r}")
-    T = DEFAULT_SEGMENT_TIME if segment_time is None else segment_time
-    return reference_task(robot, T, _grid_step(T, dt))
+    chosen = find_task(robot.description, reference_task_name(robot) if task is None else task)
+    T = chosen.segment_time if segment_time is None else segment_time
+    return chosen.trajectory(dt=_grid_step(T, dt), segment_time=T)
 
 
 def _grid_step(T: float, dt: float) -> float:

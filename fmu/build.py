@@ -158,7 +158,7 @@ def _robot_reference(description: Any) -> str:
     from model.description import BUILTIN_DIR
 
     source = Path(description.path).resolve() if description.path else None
-    if source is not None and source != (BUILTIN_DIR / f"{description.name}.toml").resolve():
+    if source is not None and source != (BUILTIN_DIR / f"{description.identifier}.toml").resolve():
         return str(source)
     return description.name
 

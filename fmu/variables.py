@@ -486,7 +486,7 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
     y_probe = np.asarray(out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
     if not np.array_equal(y_probe[:2 * n], x_probe):
         raise ValueError("plant.out: expected the first 2n outputs to be the state [q; qd] itself")
-    identifier = model_identifier or re.sub(r"\W", "_", robot.name)
+    identifier = model_identifier or robot.description.identifier
     if identifier[0].isdigit():
         identifier = "m_" + identifier
     return ModelSpec(

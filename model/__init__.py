@@ -1,5 +1,6 @@
 """Robot description, kinematics, inverse kinematics, trajectories and dynamics of serial arms."""
 
+from .chain import Chain, build_chain
 from .description import (
     BUILTIN_ROBOTS,
     InertiaConsistencyWarning,
@@ -13,10 +14,14 @@ from .clik import CLIKResult, clik, seed_clik_task
 from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
 from .robot import Robot, load_robot
 from .singularity import SingularityReport
-from .tasks import BUILTIN_TASKS, PICK_AND_PLACE, Task, WaypointError, load_waypoints, pick_and_place
+from .tasks import BUILTIN_TASKS, PICK_AND_PLACE, Task, WaypointError, find_task, load_waypoints, pick_and_place, robot_tasks
 from .trajectory import JointPath, Trajectory, ctraj, jtraj, straight_line, trapezoidal, via_points
 
 __all__ = [
+    "Chain",
+    "build_chain",
+    "find_task",
+    "robot_tasks",
     "CLIKResult",
     "Dynamics",
     "IKResult",

@@ -21,8 +21,12 @@ prismatic ``d_i = q_i + d`` offsets allowed throughout):
     RRP; alpha = (-pi/2, +pi/2, any), a1 = a2 = a3 = 0 (Stanford arm without
     wrist, lateral shoulder offset d2). Task x, y, z.
 
-Frames as in :mod:`model.kinematics`: poses ``T_0E`` of the end frame in the
-base frame, m and rad.
+Only standard-DH chains are recognised (a modified-DH or URDF chain is not
+offered a closed form, numeric IK serves every convention); ``flip`` is
+honoured. The structures solve for the DH frame n in frame 0: a world target
+``T_WE`` is first moved to ``T_0n = base^-1 T_WE tool^-1`` (:func:`chain_target`),
+and :func:`chain_jacobian` gives the matching Jacobian (frame-0 axes, origin of
+DH frame n) for the task rows. m and rad.
 """
 
 from __future__ import annotations
@@ -51,6 +55,8 @@ __all__ = [
     "closed_form_for",
     "require_closed_form",
     "joint_values",
+    "chain_target",
+    "chain_jacobian",
 ]
 
 #: A DH parameter within this of a pattern value (m or rad) matches it.
@@ -108,9 +114,30 @@ def _near(x: float, target: float) -> bool:
     return abs(x - target) <= _DH_TOL
 
 
+def _sign(lk) -> float:
+    return -1.0 if lk.flip else 1.0
+
+
 def joint_values(desc: RobotDescription, q: np.ndarray) -> np.ndarray:
-    """(n,) DH joint variables of ``q``: ``theta_i = q_i + theta`` (revolute), ``d_i = q_i + d`` (prismatic)."""
-    return np.array([qi + (lk.theta if lk.is_revolute else lk.d) for qi, lk in zip(q, desc.links)])
+    """(n,) DH joint variables of ``q``: ``theta_i = +-q_i + theta`` (revolute), ``d_i = +-q_i + d`` (prismatic), - if flipped."""
+    return np.array([_sign(lk) * qi + (lk.theta if lk.is_revolute else lk.d) for qi, lk in zip(q, desc.links)])
+
+
+def chain_target(desc: RobotDescription, T: np.ndarray) -> np.ndarray:
+    """(4, 4) pose of DH frame n in frame 0, ``base^-1 T tool^-1``, for a world tool pose ``T``."""
+    return np.linalg.solve(desc.T_base, T) @ np.linalg.inv(desc.T_tool)
+
+
+def chain_jacobian(desc: RobotDescription, T: np.ndarray, J_W: np.ndarray) -> np.ndarray:
+    """(6, n) Jacobian of DH frame n's origin in frame-0 axes, from the world tool pose ``T`` and ``jacob0`` ``J_W``.
+
+    ``v_n = v_E - w x r`` with ``r`` the tool origin seen from the frame-n origin.
+    """
+    R_W0 = desc.T_base[:3, :3]
+    v, w = R_W0.T @ J_W[:3], R_W0.T @ J_W[3:]
+    T_0E = np.linalg.solve(desc.T_base, T)
+    r = T_0E[:3, 3] - chain_target(desc, T)[:3, 3]
+    return np.vstack([v - np.cross(w.T, r).T, w])
 
 
 def _wrap(angle: float) -> float:
@@ -214,9 +241,9 @@ class ClosedForm(ABC):
         q = np.empty(self.desc.n)
         for i, (value, lk) in enumerate(zip(theta, self.desc.links)):
             if not lk.is_revolute:
-                q[i] = value - lk.d
+                q[i] = _sign(lk) * (value - lk.d)
                 continue
-            qi = _wrap(value - lk.theta)
+            qi = _wrap(_sign(lk) * (value - lk.theta))
             if lk.qlim is not None and not lk.qlim[0] <= qi <= lk.qlim[1]:
                 for shifted in (qi - _TWO_PI, qi + _TWO_PI):
                     if lk.qlim[0] <= shifted <= lk.qlim[1]:
@@ -563,7 +590,9 @@ STRUCTURES: tuple[type[ClosedForm], ...] = (Scara, Planar3R, Planar2R, Arm4, Sph
 
 
 def closed_form_for(desc: RobotDescription) -> ClosedForm | None:
-    """The recognised structure of ``desc`` with its geometry, or None."""
+    """The recognised structure of ``desc`` with its geometry, or None (always None unless standard DH)."""
+    if desc.convention != "standard":
+        return None
     for cls in STRUCTURES:
         found = cls.match(desc)
         if found is not None:
@@ -574,6 +603,11 @@ def closed_form_for(desc: RobotDescription) -> ClosedForm | None:
 def require_closed_form(desc: RobotDescription) -> ClosedForm:
     """As :func:`closed_form_for`, but raise :class:`NoClosedFormError` naming the robot if none fits."""
     found = closed_form_for(desc)
+    if found is None and desc.convention != "standard":
+        raise NoClosedFormError(
+            f"robot {desc.name!r} (convention {desc.convention!r}): closed-form inverse kinematics is recognised "
+            "from standard DH tables only; use the numeric ikine"
+        )
     if found is None:
         known = "; ".join(cls.pattern for cls in STRUCTURES)
         raise NoClosedFormError(

@@ -1,17 +1,22 @@
 """Robot description: a serial arm as frozen, validated data.
 
-A robot is a TOML file (see ``model/robots/*.toml``). :func:`load_description`
-parses and validates it once into a :class:`RobotDescription`; everything
-else in the workbench reads only that object.
+A robot is a TOML file (see ``model/robots/*.toml`` and ``docs/robot-file.md``,
+which lists every key). :func:`load_description` parses and validates it once
+into a :class:`RobotDescription`; everything else in the workbench reads only
+that object (the kinematics through :mod:`model.chain`).
 
 Conventions (those of the Robotics Toolbox):
 
-* Standard Denavit-Hartenberg: ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``.
+* Standard Denavit-Hartenberg (default): ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
+  modified (Craig): ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
   For a revolute joint ``theta_i = q_i + theta`` (offset), for a prismatic one
-  ``d_i = q_i + d``.
-* Centre of mass and inertia of link i are given in frame i, the frame at the
-  far end of link i; inertia is about the centre of mass, ordered
-  ``[Ixx, Iyy, Izz, Ixy, Iyz, Ixz]``.
+  ``d_i = q_i + d``; ``flip`` negates q.
+* Centre of mass and inertia of link i are given in frame i (standard: at the
+  far end of link i; modified: at joint i); inertia is about the centre of mass,
+  ordered ``[Ixx, Iyy, Izz, Ixy, Iyz, Ixz]``.
+* ``base`` (frame 0 in the world) and ``tool`` (tool frame in frame n) are
+  ``{xyz, rpy}`` tables, ``R = Rz(yaw) Ry(pitch) Rx(roll)``; gravity is in the world frame.
+* SI units only; a ``[units]`` table saying otherwise is refused.
 * Motor data are on the motor side: ``motor angle = G * q``; rotor inertia
   ``Jm``, viscous friction ``B`` and Coulomb friction ``Tc`` reflect to the
   joint as ``G^2 Jm``, ``G^2 B`` and ``|G| Tc``.
@@ -366,7 +371,7 @@ def _pose(w: _Where, key: str, value: Any) -> tuple[float, ...] | None:
     T = np.eye(4)
     T[:3, :3] = rpy_matrix(rpy)
     T[:3, 3] = xyz
-    return tuple(float(v) for v in T.ravel())
+    return tuple(float(v) + 0.0 for v in T.ravel())  # + 0.0: no -0.0, one digest per pose
 
 
 def _units(w: _Where, value: Any) -> Mapping[str, str]:

@@ -18,6 +18,7 @@ from .closed_form import (
     IKSolution,
     NoClosedFormError,
     WorkspaceError,
+    chain_target,
     closed_form_for,
     require_closed_form,
 )
@@ -99,7 +100,7 @@ def ikine_a(robot: "Robot", T: np.ndarray) -> list[IKSolution]:
     form = require_closed_form(robot.description)
     qlim = robot.qlim
     out = []
-    for theta, label in form.solve(T):
+    for theta, label in form.solve(chain_target(robot.description, T)):
         q = form.to_q(theta)
         within = bool(np.all(q >= qlim[0]) and np.all(q <= qlim[1]))
         reproduced = float(np.abs(pose_error(robot.fkine(q), T)).max()) <= _REPRODUCE_TOL
@@ -138,11 +139,16 @@ class IKResult:
     reason: str
 
 
+def _aligned(desc) -> bool:
+    """Whether the structure's task rows are world rows: no tool, base turned about z at most."""
+    return bool(np.array_equal(desc.T_tool, np.eye(4)) and np.allclose(desc.T_base[:3, 2], [0.0, 0.0, 1.0], atol=1e-12))
+
+
 def default_mask(robot: "Robot") -> np.ndarray:
     """(6,) default ``ikine`` weights on [x y z rx ry rz] for ``robot``.
 
-    The task of a recognised structure (e.g. x, y, z, yaw for a SCARA), all six for
-    any robot with 6 or more joints.
+    The task of a recognised structure (e.g. x, y, z, yaw for a SCARA) when its rows are
+    world rows (no tool, base turned about z at most), all six for any robot with 6 or more joints.
 
     Raises
     ------
@@ -150,12 +156,13 @@ def default_mask(robot: "Robot") -> np.ndarray:
         Fewer than 6 joints and no recognised structure: give a mask.
     """
     form = closed_form_for(robot.description)
-    if form is not None:
+    if form is not None and _aligned(robot.description):
         return np.array(form.ikine_mask)
     if robot.n >= 6:
         return np.ones(6)
     raise ValueError(
-        f"mask: robot {robot.name!r} has {robot.n} joints and no recognised structure, so there is no default; "
+        f"mask: robot {robot.name!r} has {robot.n} joints and no recognised structure aligned with the world axes, "
+        f"so there is no default; "
         f"give 6 weights on [x y z rx ry rz] that select the components to solve (at most {robot.n})"
     )
 

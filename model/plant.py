@@ -7,8 +7,8 @@ Outputs ``y``, in this order::
     q[1..n]              joint positions, rad (revolute) / m (prismatic)
     qd[1..n]             joint velocities, rad/s / m/s
     qm[1..n]             motor positions G q, rad (a prismatic joint's G is in rad/m)
-    tool_position[1..3]  origin of frame n in the base frame, m
-    tool_rpy[1..3]       roll, pitch, yaw of frame n, rad: R_0n = Rz(yaw) Ry(pitch) Rx(roll)
+    tool_position[1..3]  origin of the tool frame E in the world frame (``fkine``), m
+    tool_rpy[1..3]       roll, pitch, yaw of the tool frame, rad: R_WE = Rz(yaw) Ry(pitch) Rx(roll)
                          (ZYX angles; pitch in [-pi/2, pi/2], roll and yaw are not unique at pitch = +-pi/2)
 
 Both Functions are pure SX (no external calls) and code-generatable.
@@ -89,8 +89,8 @@ def build_plant(robot: Robot) -> Plant:
     q, qd = x[:n], x[n:]
     qdd = dyn.functions.accel(q, qd, ca.DM(G) * u, p)
     xdot = ca.vertcat(qd, qdd)
-    T_0n = robot.kinematics.fkine(q)
-    y = ca.vertcat(q, qd, ca.DM(G) * q, T_0n[0:3, 3], rpy_zyx_sx(T_0n[0:3, 0:3]))
+    T_WE = robot.kinematics.fkine(q)
+    y = ca.vertcat(q, qd, ca.DM(G) * q, T_WE[0:3, 3], rpy_zyx_sx(T_WE[0:3, 0:3]))
 
     pos_unit = ["rad" if lk.is_revolute else "m" for lk in desc.links]
     vel_unit = ["rad/s" if lk.is_revolute else "m/s" for lk in desc.links]
@@ -101,7 +101,7 @@ def build_plant(robot: Robot) -> Plant:
     )
     out_units = pos_unit + vel_unit + ["rad"] * n + ["m"] * 3 + ["rad"] * 3
     return Plant(
-        name=robot.name,
+        name=robot.description.identifier,
         n=n,
         nx=2 * n,
         nu=n,

@@ -94,20 +94,20 @@ class Robot:
         return build_kinematics(self.description)
 
     def fkine(self, q: Any) -> np.ndarray:
-        """(4, 4) pose ``T_0E`` of the end-effector frame in the base frame; q in rad / m."""
+        """(4, 4) pose ``T_WE`` of the tool frame in the world frame (base and tool included); q in rad / m."""
         return np.array(self.kinematics.fkine(self._q(q)))
 
     def fkine_all(self, q: Any) -> np.ndarray:
-        """(n+1, 4, 4) poses of the base frame and of every link frame, in the base frame."""
+        """(n+1, 4, 4) world poses of frame 0 (the base) and of every link frame (DH frame i for DH tables)."""
         stacked = np.array(self.kinematics.fkine_all(self._q(q)))
         return stacked.reshape(self.n + 1, 4, 4)
 
     def jacob0(self, q: Any) -> np.ndarray:
-        """(6, n) geometric Jacobian, rows [v; w], base-frame axes (m/s and rad/s per joint rate)."""
+        """(6, n) geometric Jacobian of the tool origin, rows [v; w], world-frame axes (m/s and rad/s per joint rate)."""
         return np.array(self.kinematics.jacob0(self._q(q)))
 
     def jacobe(self, q: Any) -> np.ndarray:
-        """(6, n) geometric Jacobian, rows [v; w], end-effector-frame axes."""
+        """(6, n) geometric Jacobian of the tool origin, rows [v; w], tool-frame axes."""
         return np.array(self.kinematics.jacobe(self._q(q)))
 
     # ----------------------------------------------------------- singularities

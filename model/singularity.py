@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from .closed_form import closed_form_for, joint_values
+from .closed_form import chain_jacobian, closed_form_for, joint_values
 
 if TYPE_CHECKING:  # pragma: no cover
     from .robot import Robot
@@ -29,13 +29,14 @@ def task_jacobian(robot: "Robot", q: np.ndarray) -> tuple[np.ndarray, tuple[str,
     """(m, n) task Jacobian at ``q`` and the names of its m rows.
 
     The recognised structure's task rows (e.g. ``("x", "y", "z", "rz")`` for a
-    SCARA, ``("x", "y", "z", "pitch")`` for arm4), else all six rows of ``jacob0``.
+    SCARA, ``("x", "y", "z", "pitch")`` for arm4) of the frame-0 Jacobian of DH frame n
+    (:func:`model.closed_form.chain_jacobian`: base and tool removed), else all six rows of ``jacob0``.
     """
     J0 = robot.jacob0(q)
     form = closed_form_for(robot.description)
     if form is None:
         return J0, _ROW_NAMES
-    return form.task_jacobian(J0), form.task_labels
+    return form.task_jacobian(chain_jacobian(robot.description, robot.fkine(q), J0)), form.task_labels
 
 
 def _rows(robot: "Robot", q: np.ndarray, axes: Sequence[bool] | str) -> np.ndarray:

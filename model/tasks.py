@@ -1,11 +1,15 @@
-"""Named joint-space tasks: built-in ones and waypoint files.
+"""Named joint-space tasks: the ``[[tasks]]`` of a robot file, the generic tour, and waypoint files.
 
 A :class:`Task` is a list of joint-space waypoints for one robot, visited in
 order with one duration per segment; :meth:`Task.trajectory` turns it into a
 sampled :class:`~model.trajectory.Trajectory` (quintic per segment, stopping at
 every waypoint, by default).
 
-The built-in task is the SCARA pick-and-place of the seed report 000:
+Tasks are data: a robot file lists its own (:func:`robot_tasks`, validated by
+the description); :func:`find_task` looks one up by name, where ``"tour"`` is
+the generic ``rest -> 25 % of every joint range -> 75 % -> rest`` of any robot
+(:func:`tour`). No behaviour depends on a robot's name. The SCARA file carries
+the pick-and-place of the seed report 000 (:data:`PICK_AND_PLACE`):
 
 >>> from model.tasks import pick_and_place
 >>> traj = pick_and_place()          # 5 segments of 3 s, sampled every 10 ms
@@ -22,6 +26,7 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -29,7 +34,7 @@ from typing import Any, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .description import RobotDescription, load_description
+from .description import InertiaConsistencyWarning, RobotDescription, load_description
 from .trajectory import Trajectory, via_points
 
 try:  # Python >= 3.11
@@ -42,13 +47,18 @@ __all__ = [
     "WaypointError",
     "PICK_AND_PLACE",
     "BUILTIN_TASKS",
+    "TOUR",
+    "finite_limits",
+    "robot_tasks",
+    "tour",
+    "find_task",
     "pick_and_place",
     "load_waypoints",
     "check_waypoints",
 ]
 
-_HALF_PI = 0.5 * math.pi
-
+#: Name of the generic task every robot has (:func:`tour`).
+TOUR = "tour"
 
 class WaypointError(ValueError):
     """Waypoints are unreadable or invalid for the robot; the message names the source, row and joint."""
@@ -112,30 +122,81 @@ class Task:
         return via_points(self.waypoints, times, dt, t0=t0, profile=profile)
 
 
-#: The seed's SCARA pick-and-place in joint space (theta1, theta2, d3, theta4).
-#: qC and qD have theta2 = 0: the arm is stretched (a kinematic singularity), harmless in joint space.
-PICK_AND_PLACE = Task(
-    name="pick_and_place",
-    robot="scara",
-    waypoints=np.array([
-        [0.0, 0.0, 1.0, 0.0],            # rest
-        [_HALF_PI, _HALF_PI, 1.0, 0.0],  # qA, above the pick point
-        [_HALF_PI, _HALF_PI, 3.0, 0.0],  # qB, pick
-        [_HALF_PI, _HALF_PI, 1.0, 0.0],  # qA
-        [_HALF_PI, 0.0, 1.0, 0.0],       # qC, above the place point
-        [_HALF_PI, 0.0, 3.0, 0.0],       # qD, place
-    ]),
-    labels=("rest", "A", "B (pick)", "A", "C", "D (place)"),
-    segment_time=3.0,
-    description="SCARA pick-and-place of seed report 000: quintic joint segments of 3 s, stop at each waypoint",
-)
-
-#: Built-in tasks by name.
-BUILTIN_TASKS: dict[str, Task] = {PICK_AND_PLACE.name: PICK_AND_PLACE}
-
-
 def _description(robot: str | Path | RobotDescription) -> RobotDescription:
     return robot if isinstance(robot, RobotDescription) else load_description(robot)
+
+
+def robot_tasks(robot: str | Path | RobotDescription) -> dict[str, Task]:
+    """The ``[[tasks]]`` of a robot file by name, in file order (validated with the description)."""
+    desc = _description(robot)
+    return {
+        t["name"]: Task(name=t["name"], robot=desc.name, waypoints=np.array(t["waypoints"], dtype=float),
+                        labels=tuple(t["labels"]), segment_time=float(t["segment_time"]), description=t["description"])
+        for t in desc.tasks
+    }
+
+
+def finite_limits(desc: RobotDescription) -> npt.NDArray[np.float64]:
+    """(2, n) joint limits with unlimited joints bounded to [-pi, pi] rad or [-1, 1] m."""
+    lim = desc.qlim.copy()
+    for j, link in enumerate(desc.links):
+        span = math.pi if link.is_revolute else 1.0
+        if not math.isfinite(lim[0, j]):
+            lim[0, j] = -span
+        if not math.isfinite(lim[1, j]):
+            lim[1, j] = span
+    return lim
+
+
+def tour(robot: str | Path | RobotDescription, segment_time: float = 3.0) -> Task:
+    """The generic task of any robot: rest -> 25 % of every joint range -> 75 % -> rest.
+
+    Ranges without limits are taken as [-pi, pi] rad or [-1, 1] m (:func:`finite_limits`);
+    the rest position is clipped into the limits.
+    """
+    desc = _description(robot)
+    lim = finite_limits(desc)
+    rest = np.clip(desc.q_rest, lim[0], lim[1])
+    a = lim[0] + 0.25 * (lim[1] - lim[0])
+    b = lim[0] + 0.75 * (lim[1] - lim[0])
+    return Task(name=TOUR, robot=desc.name, waypoints=np.vstack([rest, a, b, rest]),
+                labels=("rest", "25 %", "75 %", "rest"), segment_time=float(segment_time),
+                description="generic tour: rest, 25 % and 75 % of every joint range, rest")
+
+
+def find_task(robot: str | Path | RobotDescription, name: str) -> Task:
+    """The task ``name`` of a robot: one of its ``[[tasks]]`` or ``"tour"``; ``-`` and ``_`` are the same.
+
+    Raises
+    ------
+    WaypointError
+        Naming the robot, the task and the tasks it has.
+    """
+    desc = _description(robot)
+    tasks = robot_tasks(desc)
+    key = name.replace("-", "_")
+    for task_name, task in tasks.items():
+        if task_name.replace("-", "_") == key:
+            return task
+    if key == TOUR:
+        return tour(desc)
+    known = ", ".join(repr(t) for t in (*tasks, TOUR))
+    raise WaypointError(f"task {name!r}: robot {desc.name!r} has no such task; expected one of {known} or a waypoint file")
+
+
+def _scara_tasks() -> dict[str, Task]:
+    with warnings.catch_warnings():  # the seed's SCARA link 2 inertia breaks the triangle inequality, knowingly
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        return robot_tasks("scara")
+
+
+#: The seed's SCARA pick-and-place in joint space (theta1, theta2, d3, theta4), read from
+#: ``model/robots/scara.toml``. qC and qD have theta2 = 0: the arm is stretched (a kinematic
+#: singularity), harmless in joint space.
+PICK_AND_PLACE: Task = _scara_tasks()["pick_and_place"]
+
+#: The built-in robots' file tasks by name (kept for existing callers; see :func:`robot_tasks`).
+BUILTIN_TASKS: dict[str, Task] = {PICK_AND_PLACE.name: PICK_AND_PLACE}
 
 
 def check_waypoints(waypoints: npt.ArrayLike, robot: str | Path | RobotDescription, where: str) -> npt.NDArray[np.float64]:
@@ -208,7 +269,7 @@ def pick_and_place(robot: str | Path | RobotDescription = "scara", segment_time:
         The robot does not have 4 joints or a waypoint is outside its limits.
     """
     task = PICK_AND_PLACE
-    desc = _description(robot)
+    desc = _description(robot)  # another robot's limits may refuse the SCARA's waypoints
     check_waypoints(task.waypoints, desc, f"{task.name} (robot {desc.name!r})")
     return task.trajectory(dt=dt, segment_time=segment_time, profile=profile)
 

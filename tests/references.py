@@ -1,7 +1,8 @@
 """Independent reference models built from our robot descriptions, for tests and benchmarks.
 
-* :func:`pinocchio_model`: a Pinocchio model from standard DH data.
-* :func:`rtb_robot`: a Robotics Toolbox ``DHRobot`` with the same links and motor data.
+* :func:`pinocchio_model`: a Pinocchio model from standard or modified DH data, base, tool and flip.
+* :func:`rtb_robot`: a Robotics Toolbox ``DHRobot`` with the same links (``RevoluteDH``/``PrismaticDH``
+  or ``RevoluteMDH``/``PrismaticMDH``, ``flip``), base, tool and motor data.
 
 Standard DH to Pinocchio: joint i is a revolute (RZ) or prismatic (PZ) joint
 about the z axis of DH frame i-1; its placement in the previous joint's frame
@@ -9,8 +10,14 @@ is the constant part of the previous link transform,
 ``M_i = Rz(theta_{i-1}) Tz(d_{i-1}) Tx(a_{i-1}) Rx(alpha_{i-1})`` (identity for
 joint 1), with the joint variable replacing theta (revolute) or d (prismatic).
 DH frame i is therefore body i's frame times ``M_{i+1}``; inertias given in
-DH frame i are moved to body i by that placement. Motors enter Pinocchio as
-``armature = G^2 Jm`` (the reflected model); friction is not part of it.
+DH frame i are moved to body i by that placement.
+
+Modified DH (Craig) to Pinocchio: ``A_i = Rx(alpha) Tx(a) Rz(theta + q) Tz(d)``
+is read directly as joint i placed at ``Rx(alpha) Tx(a) Rz(theta) Tz(d)`` in
+the previous joint's frame, moving about its z; frame i is body i's frame and
+inertias are used as given. The base multiplies the first placement, the tool
+the tool frame's placement; a flipped joint moves about -z. Motors enter
+Pinocchio as ``armature = G^2 Jm`` (the reflected model); friction is not part of it.
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ from model.description import BUILTIN_DIR, BUILTIN_ROBOTS, RobotDescription
 __all__ = [
     "available_robots",
     "dh_constant_placement",
+    "mdh_constant_placement",
     "friction_reference",
     "pinocchio_model",
     "rtb_robot",
@@ -45,8 +53,30 @@ def dh_constant_placement(link):
     return pin.SE3(R, p)
 
 
+def mdh_constant_placement(link):
+    """``Rx(alpha) Tx(a) Rz(theta) Tz(d)`` with the link's constant modified-DH values, as a pin.SE3."""
+    import pinocchio as pin
+
+    cal, sal = np.cos(link.alpha), np.sin(link.alpha)
+    ct, st = np.cos(link.theta), np.sin(link.theta)
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cal, -sal], [0.0, sal, cal]])
+    Rz = np.array([[ct, -st, 0.0], [st, ct, 0.0], [0.0, 0.0, 1.0]])
+    return pin.SE3(Rx @ Rz, np.array([link.a, 0.0, 0.0]) + Rx @ np.array([0.0, 0.0, link.d]))
+
+
+def _pin_joint(link):
+    import pinocchio as pin
+
+    if not link.flip:
+        return pin.JointModelRZ() if link.is_revolute else pin.JointModelPZ()
+    axis = np.array([0.0, 0.0, -1.0])
+    return pin.JointModelRevoluteUnaligned(axis) if link.is_revolute else pin.JointModelPrismaticUnaligned(axis)
+
+
 def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=None):
-    """A ``pin.Model`` of ``desc`` with frame ``"tool"`` at DH frame n.
+    """A ``pin.Model`` of ``desc`` (standard or modified DH) with frame ``"tool"`` at the tool frame.
+
+    The payload is placed in DH frame n (the flange, before the tool).
 
     Parameters
     ----------
@@ -59,13 +89,17 @@ def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=No
 
     model = pin.Model()
     model.gravity = pin.Motion(np.array(desc.gravity, dtype=float), np.zeros(3))
+    modified = desc.convention == "modified"
+    if desc.convention not in ("standard", "modified"):
+        raise ValueError(f"pinocchio_model: DH conventions only, got {desc.convention!r}")
     parent = 0
-    placement = pin.SE3.Identity()
+    placement = pin.SE3(desc.T_base)
     armatures = []
     for i, link in enumerate(desc.links):
-        joint = pin.JointModelRZ() if link.is_revolute else pin.JointModelPZ()
-        jid = model.addJoint(parent, joint, placement, f"joint{i + 1}")
-        M_frame = dh_constant_placement(link)  # DH frame i in body i's frame
+        if modified:
+            placement = placement * mdh_constant_placement(link)
+        jid = model.addJoint(parent, _pin_joint(link), placement, f"joint{i + 1}")
+        M_frame = pin.SE3.Identity() if modified else dh_constant_placement(link)  # frame i in body i's frame
         inertia = pin.Inertia(link.mass, np.array(link.com, dtype=float), link.inertia_matrix)
         model.appendBodyToJoint(jid, M_frame.act(inertia), pin.SE3.Identity())
         armatures.append(link.gear_ratio ** 2 * link.motor_inertia if armature else 0.0)
@@ -75,7 +109,7 @@ def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=No
         ixx, iyy, izz, ixy, iyz, ixz = inertia6
         I = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
         model.appendBodyToJoint(parent, placement.act(pin.Inertia(mass, np.array(com, dtype=float), I)), pin.SE3.Identity())
-    model.addFrame(pin.Frame("tool", parent, placement, pin.FrameType.OP_FRAME))
+    model.addFrame(pin.Frame("tool", parent, placement * pin.SE3(desc.T_tool), pin.FrameType.OP_FRAME))
     model.armature = np.array(armatures)
     return model
 
@@ -99,16 +133,23 @@ def rtb_robot(desc: RobotDescription):
     """A Robotics Toolbox ``DHRobot`` with the links, inertias and motor data of ``desc``."""
     import roboticstoolbox as rtb
 
+    from spatialmath import SE3
+
+    modified = desc.convention == "modified"
+    if desc.convention not in ("standard", "modified"):
+        raise ValueError(f"rtb_robot: DH conventions only, got {desc.convention!r}")
+    revolute, prismatic = (rtb.RevoluteMDH, rtb.PrismaticMDH) if modified else (rtb.RevoluteDH, rtb.PrismaticDH)
     links = []
     for link in desc.links:
         kw = dict(
             a=link.a, alpha=link.alpha, m=link.mass, r=list(link.com), I=link.inertia_matrix,
             Jm=link.motor_inertia, G=link.gear_ratio, B=link.viscous_friction, Tc=list(link.coulomb_friction),
+            flip=link.flip,
         )
         if link.is_revolute:
-            links.append(rtb.RevoluteDH(d=link.d, offset=link.theta, **kw))
+            links.append(revolute(d=link.d, offset=link.theta, **kw))
         else:
-            links.append(rtb.PrismaticDH(theta=link.theta, offset=link.d, **kw))
-    robot = rtb.DHRobot(links, name=desc.name)
-    robot.gravity = np.array(desc.gravity, dtype=float)  # RTB: the gravity acceleration vector, base frame
+            links.append(prismatic(theta=link.theta, offset=link.d, **kw))
+    robot = rtb.DHRobot(links, name=desc.name, base=SE3(desc.T_base, check=False), tool=SE3(desc.T_tool, check=False))
+    robot.gravity = np.array(desc.gravity, dtype=float)  # RTB: the gravity acceleration vector, world frame
     return robot

@@ -534,3 +534,58 @@ def test_new_robot_files_are_physical(name: str) -> None:
     assert np.all(desc.q_rest >= desc.qlim[0]) and np.all(desc.q_rest <= desc.qlim[1])
     structure = {"planar3r": "planar3r", "arm4": Arm4.kind, "spherical": SphericalRRP.kind}[name]
     assert closed_form_for(desc).kind == structure
+
+
+def _with(desc, **top):
+    """``desc`` as a file dict with extra top-level keys (base, tool, convention) and flipped links."""
+    import dataclasses
+
+    flips = top.pop("flip", ())
+    links = tuple(dataclasses.replace(lk, flip=i in flips) for i, lk in enumerate(desc.links))
+    base = description_from_dict({"name": desc.name, "links": [{"joint": "revolute", "a": 0, "alpha": 0, "d": 0, "theta": 0}],
+                                  **top}, "with.toml")
+    return dataclasses.replace(desc, links=links, base=base.base, tool=base.tool, convention=base.convention)
+
+
+@pytest.mark.parametrize("name", ["scara", "arm4", "spherical", "planar3r"])
+def test_closed_form_with_base_tool_and_flip_reproduces_world_poses(name: str) -> None:
+    """Targets are world poses of the tool: the solver moves them to base^-1 T tool^-1 (1e-9: round-trip of atan2/sqrt)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plain = load_description(name)
+    base = {"xyz": [0.4, -0.3, 0.8], "rpy": [0.5, -0.2, 1.3]}
+    tool = {"xyz": [0.0, 0.0, 0.15]} if name != "planar3r" else {"xyz": [0.1, 0.05, 0.0], "rpy": [0.0, 0.0, 0.4]}
+    robot = Robot(_with(plain, base=base, tool=tool, flip=(0,)))
+    assert closed_form_for(robot.description) is not None
+    rng = np.random.default_rng(3)
+    lo, hi = np.maximum(robot.qlim[0], -2.5), np.minimum(robot.qlim[1], 2.5)
+    for _ in range(5):
+        q = rng.uniform(lo, hi)
+        T = robot.fkine(q)
+        sols = ikine_a(robot, T)
+        assert any(np.abs(s.q - q).max() <= 1e-9 or np.abs(pose_error(robot.fkine(s.q), T)).max() <= 1e-9 for s in sols)
+        for s in sols:
+            if s.reproduces_pose:
+                assert np.abs(pose_error(robot.fkine(s.q), T)).max() <= 1e-9
+
+
+def test_no_closed_form_for_modified_dh() -> None:
+    robot = Robot(_with(load_description("planar2r"), convention="modified"))
+    assert closed_form_for(robot.description) is None
+    with pytest.raises(NoClosedFormError, match=r"robot 'planar2r' \(convention 'modified'\): closed-form inverse "
+                                                 r"kinematics is recognised from standard DH tables only"):
+        ikine_a(robot, robot.fkine([0.3, 0.4]))
+    result = ikine(robot, robot.fkine([0.3, 0.4]), q0=[0.2, 0.5], mask=[1, 1, 0, 0, 0, 0])
+    assert result.success and np.abs(robot.fkine(result.q)[:2, 3] - robot.fkine([0.3, 0.4])[:2, 3]).max() <= 1e-9
+
+
+def test_task_rows_of_a_rotated_base_are_those_of_the_chain() -> None:
+    """manipulability('task') is invariant under base and tool (it is a property of the chain)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plain = Robot(load_description("scara"))
+        moved = Robot(_with(plain.description, base={"rpy": [0.7, 0.3, -0.4]}, tool={"xyz": [0.02, 0.0, 0.3]}))
+    for q in ([0.3, 0.8, 1.0, 0.2], [1.0, -1.2, 2.0, -0.5]):
+        assert moved.manipulability(q) == pytest.approx(plain.manipulability(q), rel=1e-12)
+    with pytest.raises(ValueError, match=r"mask: robot 'scara' has 4 joints and no recognised structure aligned"):
+        default_mask(moved)

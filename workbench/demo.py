@@ -151,7 +151,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
         progress.note(f"{label}: {len(designs[kind].loops)} loops designed")
 
     progress.step("exporting the plant as an FMI 2.0 FMU (Co-Simulation + Model Exchange)")
-    fmu_path = fmu.export_fmu(robot, out / f"{robot.name}.fmu", step=1.0 / rate_hz)
+    fmu_path = fmu.export_fmu(robot, out / f"{robot.description.identifier}.fmu", step=1.0 / rate_hz)
     files.append(fmu_path)
     progress.note(f"wrote {fmu_path}")
 
@@ -194,7 +194,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     if gif:
         progress.step("animating the arm along the closed-loop motion")
         res = fmu_results["ct"]
-        gif_path = animate_arm(robot, res.t, res.q, out / f"{robot.name}_motion.gif",
+        gif_path = animate_arm(robot, res.t, res.q, out / f"{robot.description.identifier}_motion.gif",
                                progress=lambda k, total: k % 50 == 0 and progress.note(f"frame {k} of {total}"))
         files.append(gif_path)
         report.heading("Motion")

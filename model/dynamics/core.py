@@ -31,6 +31,7 @@ __all__ = ["Dynamics", "NoCompilerWarning", "source_fingerprint"]
 _MODEL_SOURCES = (
     *sorted(Path(__file__).resolve().parent.glob("*.py")),
     Path(__file__).resolve().parents[1] / "kinematics.py",
+    Path(__file__).resolve().parents[1] / "chain.py",
 )
 
 
@@ -205,7 +206,7 @@ class Dynamics:
                 assert self._build_info is not None
                 return self._build_info
             key = f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}|{source_fingerprint()}"
-            stem = f"{self.description.name}-{self.motor_model}"
+            stem = f"{self.description.identifier}-{self.motor_model}"
             funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
             self._library, self._build_info = build_library(stem, key, funcs)
             self._fallback = False

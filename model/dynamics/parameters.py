@@ -11,7 +11,7 @@ names::
     viscous_friction[1..n]       N m s/rad, motor side
     coulomb_friction_pos[1..n]   N m, motor side, used when qd > 0
     coulomb_friction_neg[1..n]   N m, motor side, used when qd < 0 (<= 0)
-    gravity[1..3]                m/s^2, base frame
+    gravity[1..3]                m/s^2, world frame
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ _FIELDS = (
     ("viscous_friction", None, "N.m.s/rad", "motor viscous friction (motor side)"),
     ("coulomb_friction_pos", None, "N.m", "motor Coulomb friction for positive joint velocity (motor side)"),
     ("coulomb_friction_neg", None, "N.m", "motor Coulomb friction for negative joint velocity (motor side, <= 0)"),
-    ("gravity", 3, "m/s2", "gravitational acceleration in the base frame"),
+    ("gravity", 3, "m/s2", "gravitational acceleration in the world frame"),
 )
 
 
