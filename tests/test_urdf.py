@@ -2,7 +2,7 @@
 
 Two comparisons per robot:
 
-* our description rebuilt in Pinocchio joint by joint (:func:`pinocchio_from_description`) against
+* our description rebuilt in Pinocchio joint by joint (``references.pinocchio_model``) against
   Pinocchio's own reading of the file: checks the reading (merged fixed joints, lumped bodies, axes,
   rotated inertial origins, the tip) without our kinematics or dynamics;
 * :class:`model.Robot` end to end (fkine, jacob0, rne, inertia, gravload, coriolis, accel) against it.
@@ -24,7 +24,8 @@ from model import load_robot
 from model.description import BUILTIN_DIR, RobotDescriptionError, load_description
 from model.urdf import description_from_urdf
 from urdf_cases import joint, link, write_urdf
-from urdf_references import pin_q, pinocchio_from_description, pinocchio_urdf_arm
+from references import pinocchio_model
+from urdf_references import pin_q, pinocchio_urdf_arm
 
 RTOL = 1e-10
 
@@ -107,10 +108,10 @@ def case(request, tmp_path_factory):
 
 def test_reading_matches_pinocchio_reading_the_file(case):
     desc, ref, fid = case
-    mine = pinocchio_from_description(desc, armature=False)
+    mine = pinocchio_model(desc, armature=False)
     assert mine.nv == ref.nv == desc.n
     rd, md = ref.createData(), mine.createData()
-    mid = mine.getFrameId("tip")
+    mid = mine.getFrameId("tool")
     for q, qd, qdd in states(desc.n, 1):
         qp = pin_q(ref, q)
         pin.framesForwardKinematics(ref, rd, qp)
@@ -316,3 +317,17 @@ def test_malformed_xml_and_other_root(tmp_path):
     other.write_text('<sdf version="1.6"/>')
     with pytest.raises(RobotDescriptionError, match=r"other.urdf: the root element is <sdf>: expected a URDF <robot>"):
         load_description(other)
+
+
+def test_docs_list_the_urdf_keys_the_reader_knows():
+    import re
+    from pathlib import Path
+
+    from model import urdf
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text()
+    section = text[text.index("### URDF robot-file keys"):text.index("### How the URDF is read")]
+    rows = dict(re.findall(r"^\| `([a-z_.A-Z]+)` \|(.*)$", section, flags=re.M))
+    own = set(urdf._TOML_KEYS) - set(urdf._PASSED_ON)
+    assert set(rows) == {"joints.NAME" if key == "joints" else key for key in own}
+    assert all(f"`{key}`" in rows["joints.NAME"] for key in urdf.MOTOR_KEYS)
