@@ -331,3 +331,19 @@ def test_docs_list_the_urdf_keys_the_reader_knows():
     own = set(urdf._TOML_KEYS) - set(urdf._PASSED_ON)
     assert set(rows) == {"joints.NAME" if key == "joints" else key for key in own}
     assert all(f"`{key}`" in rows["joints.NAME"] for key in urdf.MOTOR_KEYS)
+
+
+def test_base_link_inside_the_tree_starts_the_chain_there(tmp_path):
+    """base_link = l1: the chain is j2, j3 and frame 0 is l1's frame, wherever j1 has turned it."""
+    path, tip = tiny_fixed_mid(tmp_path)
+    desc = description_from_urdf(path, {"base_link": "l1"})
+    assert [lk.name for lk in desc.links] == ["j2", "j3"]
+    mine = pinocchio_model(desc, armature=False)
+    md, fid = mine.createData(), mine.getFrameId("tool")
+    full = pin.buildModelFromUrdf(str(path))
+    fd = full.createData()
+    for q, _, _ in states(3, 9):
+        pin.framesForwardKinematics(full, fd, q)
+        pin.framesForwardKinematics(mine, md, q[1:])
+        T_l1_tip = fd.oMf[full.getFrameId("l1")].inverse() * fd.oMf[full.getFrameId(tip)]
+        close(md.oMf[fid].homogeneous, T_l1_tip.homogeneous)
