@@ -60,7 +60,7 @@ __all__ = [
 ]
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
-BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560")
+BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560", "panda", "ur5")
 JOINT_TYPES = ("revolute", "prismatic")
 CONVENTIONS = ("standard", "modified", "urdf")
 #: The accepted spellings of the ``[units]`` table: SI only, one entry per quantity.
@@ -480,7 +480,7 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
 
 
 def load_description(name_or_path: str | Path) -> RobotDescription:
-    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`) or a TOML file by path."""
+    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`), a TOML file or a ``.urdf`` file by path."""
     text_name = str(name_or_path)
     if text_name in BUILTIN_ROBOTS:
         path = BUILTIN_DIR / f"{text_name}.toml"
@@ -490,9 +490,17 @@ def load_description(name_or_path: str | Path) -> RobotDescription:
             raise RobotDescriptionError(
                 f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; no such file"
             )
+    if path.suffix.lower() == ".urdf":
+        from .urdf import description_from_urdf
+
+        return description_from_urdf(path)
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise RobotDescriptionError(f"{path}: not valid TOML: {exc}") from exc
+    if "urdf" in data:  # a TOML that points at a URDF and adds what URDF lacks
+        from .urdf import description_from_urdf_toml
+
+        return description_from_urdf_toml(data, path)
     return description_from_dict(data, str(path))

@@ -1,8 +1,10 @@
 """Independent reference models built from our robot descriptions, for tests and benchmarks.
 
-* :func:`pinocchio_model`: a Pinocchio model from standard or modified DH data, base, tool and flip.
+* :func:`pinocchio_model`: a Pinocchio model from standard or modified DH data, base, tool and flip,
+  or from the joint origins and axes of a urdf description.
 * :func:`rtb_robot`: a Robotics Toolbox ``DHRobot`` with the same links (``RevoluteDH``/``PrismaticDH``
-  or ``RevoluteMDH``/``PrismaticMDH``, ``flip``), base, tool and motor data.
+  or ``RevoluteMDH``/``PrismaticMDH``, ``flip``), base, tool and motor data; for a urdf description
+  (coordinate joint axes) an ETS ``Robot`` of ``SE3(origin) * Rx|Ry|Rz``.
 
 Standard DH to Pinocchio: joint i is a revolute (RZ) or prismatic (PZ) joint
 about the z axis of DH frame i-1; its placement in the previous joint's frame
@@ -16,7 +18,9 @@ Modified DH (Craig) to Pinocchio: ``A_i = Rx(alpha) Tx(a) Rz(theta + q) Tz(d)``
 is read directly as joint i placed at ``Rx(alpha) Tx(a) Rz(theta) Tz(d)`` in
 the previous joint's frame, moving about its z; frame i is body i's frame and
 inertias are used as given. The base multiplies the first placement, the tool
-the tool frame's placement; a flipped joint moves about -z. Motors enter
+the tool frame's placement; a flipped joint moves about -z. A urdf link is a joint
+placed at its ``origin`` in body i-1, moving about its unit ``axis``; body i is its
+frame and the tool frame is body n's times ``tip`` and ``tool``. Motors enter
 Pinocchio as ``armature = G^2 Jm`` (the reflected model); friction is not part of it.
 """
 
@@ -24,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from model.description import BUILTIN_DIR, BUILTIN_ROBOTS, RobotDescription
+from model.description import BUILTIN_DIR, BUILTIN_ROBOTS, RobotDescription, pose_matrix
 
 __all__ = [
     "available_robots",
@@ -73,10 +77,17 @@ def _pin_joint(link):
     return pin.JointModelRevoluteUnaligned(axis) if link.is_revolute else pin.JointModelPrismaticUnaligned(axis)
 
 
-def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=None):
-    """A ``pin.Model`` of ``desc`` (standard or modified DH) with frame ``"tool"`` at the tool frame.
+def _pin_axis_joint(link):
+    import pinocchio as pin
 
-    The payload is placed in DH frame n (the flange, before the tool).
+    axis = np.array(link.axis, dtype=float) * (-1.0 if link.flip else 1.0)
+    return pin.JointModelRevoluteUnaligned(axis) if link.is_revolute else pin.JointModelPrismaticUnaligned(axis)
+
+
+def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=None):
+    """A ``pin.Model`` of ``desc`` (standard or modified DH, or urdf) with frame ``"tool"`` at the tool frame.
+
+    The payload is placed in frame n (DH frame n; for urdf body n, before the tip and the tool).
 
     Parameters
     ----------
@@ -89,17 +100,19 @@ def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=No
 
     model = pin.Model()
     model.gravity = pin.Motion(np.array(desc.gravity, dtype=float), np.zeros(3))
-    modified = desc.convention == "modified"
-    if desc.convention not in ("standard", "modified"):
-        raise ValueError(f"pinocchio_model: DH conventions only, got {desc.convention!r}")
+    modified, urdf = desc.convention == "modified", desc.convention == "urdf"
+    if desc.convention not in ("standard", "modified", "urdf"):
+        raise ValueError(f"pinocchio_model: standard, modified or urdf convention, got {desc.convention!r}")
     parent = 0
     placement = pin.SE3(desc.T_base)
     armatures = []
     for i, link in enumerate(desc.links):
         if modified:
             placement = placement * mdh_constant_placement(link)
-        jid = model.addJoint(parent, _pin_joint(link), placement, f"joint{i + 1}")
-        M_frame = pin.SE3.Identity() if modified else dh_constant_placement(link)  # frame i in body i's frame
+        elif urdf:  # the joint frame's pose in body i-1, a unit axis in it
+            placement = placement * pin.SE3(pose_matrix(link.origin))
+        jid = model.addJoint(parent, _pin_axis_joint(link) if urdf else _pin_joint(link), placement, f"joint{i + 1}")
+        M_frame = pin.SE3.Identity() if modified or urdf else dh_constant_placement(link)  # frame i in body i's frame
         inertia = pin.Inertia(link.mass, np.array(link.com, dtype=float), link.inertia_matrix)
         model.appendBodyToJoint(jid, M_frame.act(inertia), pin.SE3.Identity())
         armatures.append(link.gear_ratio ** 2 * link.motor_inertia if armature else 0.0)
@@ -109,7 +122,8 @@ def pinocchio_model(desc: RobotDescription, *, armature: bool = True, payload=No
         ixx, iyy, izz, ixy, iyz, ixz = inertia6
         I = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
         model.appendBodyToJoint(parent, placement.act(pin.Inertia(mass, np.array(com, dtype=float), I)), pin.SE3.Identity())
-    model.addFrame(pin.Frame("tool", parent, placement * pin.SE3(desc.T_tool), pin.FrameType.OP_FRAME))
+    tip = pin.SE3(pose_matrix(desc.tip)) if urdf else pin.SE3.Identity()
+    model.addFrame(pin.Frame("tool", parent, placement * tip * pin.SE3(desc.T_tool), pin.FrameType.OP_FRAME))
     model.armature = np.array(armatures)
     return model
 
@@ -135,9 +149,11 @@ def rtb_robot(desc: RobotDescription):
 
     from spatialmath import SE3
 
+    if desc.convention == "urdf":
+        return _rtb_urdf_robot(desc)
     modified = desc.convention == "modified"
     if desc.convention not in ("standard", "modified"):
-        raise ValueError(f"rtb_robot: DH conventions only, got {desc.convention!r}")
+        raise ValueError(f"rtb_robot: DH conventions or urdf, got {desc.convention!r}")
     revolute, prismatic = (rtb.RevoluteMDH, rtb.PrismaticMDH) if modified else (rtb.RevoluteDH, rtb.PrismaticDH)
     links = []
     for link in desc.links:
@@ -152,4 +168,28 @@ def rtb_robot(desc: RobotDescription):
             links.append(prismatic(theta=link.theta, offset=link.d, **kw))
     robot = rtb.DHRobot(links, name=desc.name, base=SE3(desc.T_base, check=False), tool=SE3(desc.T_tool, check=False))
     robot.gravity = np.array(desc.gravity, dtype=float)  # RTB: the gravity acceleration vector, world frame
+    return robot
+
+
+def _rtb_urdf_robot(desc: RobotDescription):
+    """A Robotics Toolbox ``Robot`` of ETS links ``SE3(origin) * R{x,y,z}`` (or ``t{x,y,z}``) for a urdf
+    description whose joint axes are coordinate axes (as the Panda's and the UR5's)."""
+    import roboticstoolbox as rtb
+    from roboticstoolbox import ET
+    from spatialmath import SE3
+
+    links, parent = [], None
+    for i, lk in enumerate(desc.links):
+        axis = np.array(lk.axis, dtype=float) * (-1.0 if lk.flip else 1.0)
+        k = int(np.argmax(np.abs(axis)))
+        if abs(abs(axis[k]) - 1.0) > 1e-12:
+            raise ValueError(f"rtb_robot: joint {i + 1} axis {axis.tolist()} is not a coordinate axis")
+        motion = ((ET.Rx, ET.Ry, ET.Rz) if lk.is_revolute else (ET.tx, ET.ty, ET.tz))[k](flip=bool(axis[k] < 0))
+        parent = rtb.Link(ET.SE3(SE3(pose_matrix(lk.origin), check=False)) * motion, name=f"link{i + 1}", parent=parent,
+                          m=lk.mass, r=list(lk.com), I=lk.inertia_matrix, Jm=lk.motor_inertia, G=lk.gear_ratio,
+                          B=lk.viscous_friction, Tc=list(lk.coulomb_friction))
+        links.append(parent)
+    robot = rtb.Robot(links, name=desc.name, base=SE3(desc.T_base, check=False),
+                      tool=SE3(pose_matrix(desc.tip) @ desc.T_tool, check=False))
+    robot.gravity = np.array(desc.gravity, dtype=float)
     return robot

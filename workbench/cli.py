@@ -17,6 +17,7 @@ import numpy as np
 import model
 from control_design.commands import register as register_control
 from fmu.commands import register as register_fmu
+from model.commands import register as register_model
 from model.description import RobotDescriptionError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -104,6 +105,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected", help="default reflected")
     p.add_argument("--force", action="store_true", help="rebuild even when the cache has it")
     p.set_defaults(func=_cmd_build)
+    register_model(sub)
     register_control(sub)
     register_fmu(sub)
     p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")

@@ -1,0 +1,442 @@
+"""Robots from URDF: the serial chain of a URDF file as a :class:`~model.description.RobotDescription`.
+
+A URDF is read by ``yourdfpy`` (meshes never loaded, no scene graph) after the
+bytes have passed ``defusedxml`` with document type declarations refused, so
+neither an external entity (a local file, a URL) nor an entity bomb is ever
+expanded; files above :data:`MAX_URDF_BYTES` and trees with more than
+:data:`MAX_MOVING_JOINTS` moving joints are refused before any work.
+
+The model is the chain from ``base_link`` (default: the URDF root) to
+``tip_link`` (default: the only leaf). Its links use the ``"urdf"`` convention
+of :class:`~model.description.LinkDescription`: link i's ``origin`` is the pose
+of joint frame i in link frame i-1 (fixed joints before it merged in), its
+``axis`` the unit joint axis in the joint frame. What hangs rigidly on a moving
+link, through fixed joints or through off-chain joints held at 0 (fingers, a
+gripper), is lumped into that link's mass, centre of mass and inertia, as
+Pinocchio's ``buildReducedModel`` does. The fixed joints after the last moving
+joint up to ``tip_link`` become the description's ``tip``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+from xml.etree.ElementTree import ParseError
+
+import numpy as np
+
+from .description import RobotDescription, RobotDescriptionError, _link, _Where, description_from_dict
+
+__all__ = [
+    "MAX_URDF_BYTES",
+    "MAX_MOVING_JOINTS",
+    "MOTOR_KEYS",
+    "URDFDynamicsIgnoredWarning",
+    "UrdfChain",
+    "ChainJoint",
+    "read_urdf",
+    "serial_chain",
+    "description_from_urdf",
+    "description_from_urdf_toml",
+]
+
+MAX_URDF_BYTES = 10 * 1024 * 1024
+MAX_MOVING_JOINTS = 64
+#: The keys a ``[joints.NAME]`` table may hold: the motor keys of a ``[[links]]`` table, and its source.
+MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source")
+_MOVING = ("revolute", "continuous", "prismatic")
+_REFUSED = {
+    "floating": "a floating joint (6 degrees of freedom) is not a serial-arm joint",
+    "planar": "a planar joint (3 degrees of freedom) is not a serial-arm joint",
+}
+_TOML_KEYS = ("name", "urdf", "base_link", "tip_link", "joints", "gravity", "rest", "description", "source",
+              "units", "tasks", "base", "tool")
+_PASSED_ON = ("name", "gravity", "rest", "description", "source", "units", "tasks", "base", "tool")
+
+
+class URDFDynamicsIgnoredWarning(UserWarning):
+    """A URDF joint's ``<dynamics damping friction>`` is not used: friction comes from ``[joints.*]``."""
+
+
+@dataclass(frozen=True)
+class ChainJoint:
+    """One moving joint of the chain with the rigid body it moves (URDF joint frame and link frame).
+
+    ``origin`` (4, 4) is the joint frame in the previous moving link's frame (fixed joints merged);
+    ``axis`` the unit axis in the joint frame; ``mass`` (kg), ``com`` (m) and ``inertia`` (3, 3, kg m^2,
+    about the com) are the lumped body in the child link frame.
+    """
+
+    name: str
+    joint: str
+    origin: np.ndarray
+    axis: np.ndarray
+    qlim: tuple[float, float] | None
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+    ignored_dynamics: bool
+
+
+@dataclass(frozen=True)
+class UrdfChain:
+    """The serial chain ``base_link`` -> ``tip_link`` of a URDF; ``tip`` (4, 4) is the tip link in the last link frame."""
+
+    robot_name: str
+    base_link: str
+    tip_link: str
+    joints: tuple[ChainJoint, ...]
+    tip: np.ndarray
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def read_urdf(path: str | Path) -> Any:
+    """Parse a URDF file safely into a ``yourdfpy.Robot`` (links and joints; meshes not loaded).
+
+    Raises
+    ------
+    RobotDescriptionError
+        The file is missing, larger than :data:`MAX_URDF_BYTES`, declares a document type
+        (entities), is not well-formed XML or not a ``<robot>``.
+    """
+    import defusedxml
+    import defusedxml.ElementTree as safe_et
+
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise RobotDescriptionError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
+    if size > MAX_URDF_BYTES:
+        raise RobotDescriptionError(f"{path}: {size} bytes: larger than the URDF size limit of {MAX_URDF_BYTES} bytes")
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_URDF_BYTES + 1)
+    if len(data) > MAX_URDF_BYTES:
+        raise RobotDescriptionError(f"{path}: larger than the URDF size limit of {MAX_URDF_BYTES} bytes")
+    try:
+        root = safe_et.fromstring(data, forbid_dtd=True, forbid_entities=True, forbid_external=True)
+    except (defusedxml.DTDForbidden, defusedxml.EntitiesForbidden, defusedxml.ExternalReferenceForbidden):
+        raise RobotDescriptionError(
+            f"{path}: refused: the file declares a document type (<!DOCTYPE ...>), whose entities could read "
+            "other files or expand without bound; a URDF needs none"
+        ) from None
+    except ParseError as exc:
+        raise RobotDescriptionError(f"{path}: not well-formed XML: {exc}") from None
+    if root.tag != "robot":
+        raise RobotDescriptionError(f"{path}: the root element is <{root.tag}>: expected a URDF <robot>")
+    from yourdfpy import URDF
+
+    try:
+        urdf = URDF.load(io.BytesIO(data), build_scene_graph=False, build_collision_scene_graph=False,
+                         load_meshes=False, load_collision_meshes=False)
+    except (KeyError, AttributeError, ValueError, TypeError) as exc:
+        raise RobotDescriptionError(f"{path}: not a valid URDF ({type(exc).__name__}: {exc}): every <link> and "
+                                    "<joint> needs a name, every joint a type, a parent and a child link") from None
+    return urdf.robot
+
+
+def _unit_axis(path: Path, joint: Any) -> np.ndarray:
+    axis = np.asarray(joint.axis, dtype=float)
+    norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
+    if not (math.isfinite(norm) and norm > 1e-9):
+        raise RobotDescriptionError(f"{path}, joint {joint.name!r}: axis {axis.tolist()}: expected a non-zero axis xyz")
+    return axis / norm
+
+
+def _origin(path: Path, what: str, origin: Any) -> np.ndarray:
+    T = np.eye(4) if origin is None else np.asarray(origin, dtype=float)
+    if not np.all(np.isfinite(T)):
+        raise RobotDescriptionError(f"{path}, {what}: origin {T[:3, 3].tolist()}: expected finite xyz and rpy")
+    return T
+
+
+def _body(path: Path, link: Any) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass, com and inertia about the com of one URDF link, in its link frame."""
+    inertial = link.inertial
+    if inertial is None:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    mass = 0.0 if inertial.mass is None else float(inertial.mass)
+    T = _origin(path, f"link {link.name!r} <inertial>", inertial.origin)
+    I = np.zeros((3, 3)) if inertial.inertia is None else np.asarray(inertial.inertia, dtype=float)
+    if not (math.isfinite(mass) and mass >= 0 and np.all(np.isfinite(I))):
+        raise RobotDescriptionError(f"{path}, link {link.name!r}: <inertial> mass {mass!r}: expected a finite mass >= 0 "
+                                    "and a finite inertia")
+    R = T[:3, :3]
+    return mass, T[:3, 3].copy(), R @ I @ R.T
+
+
+def _lump(bodies: Sequence[tuple[float, np.ndarray, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+    """One rigid body from several in one frame: total mass, common com, inertia about it (parallel axes)."""
+    mass = sum(m for m, _, _ in bodies)
+    com = sum((m * c for m, c, _ in bodies), np.zeros(3)) / mass if mass > 0 else np.zeros(3)
+    inertia = np.zeros((3, 3))
+    for m, c, I in bodies:
+        d = c - com
+        inertia += I + m * (float(d @ d) * np.eye(3) - np.outer(d, d))
+    return mass, com, inertia
+
+
+def _limit(path: Path, joint: Any) -> tuple[float, float] | None:
+    if joint.type == "continuous" or joint.limit is None:
+        return None
+    lo = 0.0 if joint.limit.lower is None else float(joint.limit.lower)
+    hi = 0.0 if joint.limit.upper is None else float(joint.limit.upper)
+    if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
+        raise RobotDescriptionError(f"{path}, joint {joint.name!r}: <limit lower={lo!r} upper={hi!r}>: expected "
+                                    "finite lower <= upper")
+    return None if lo == hi else (lo, hi)
+
+
+def _ignored_dynamics(path: Path, joint: Any) -> bool:
+    dyn = joint.dynamics
+    if dyn is None:
+        return False
+    values = []
+    for name in ("damping", "friction"):
+        raw = getattr(dyn, name)
+        try:
+            values.append(0.0 if raw is None else float(raw))
+        except ValueError:
+            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: <dynamics {name}={raw!r}>: expected a number") from None
+    return any(v != 0.0 for v in values)
+
+
+def _listing(names: Sequence[str], limit: int = 20) -> str:
+    names = sorted(names)
+    shown = ", ".join(names[:limit])
+    return shown + (f", ... ({len(names)} in all)" if len(names) > limit else "")
+
+
+def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip_link: str | None = None) -> UrdfChain:
+    """The chain ``base_link`` -> ``tip_link`` of a parsed URDF, off-chain bodies lumped (joints at 0).
+
+    Raises
+    ------
+    RobotDescriptionError
+        Naming the joint or link: duplicate names, a link with two parents (a closed chain), no single
+        root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, too many
+        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``.
+    """
+    path = Path(path)
+    links = {}
+    for link in robot.links:
+        if link.name in links:
+            raise RobotDescriptionError(f"{path}, link {link.name!r}: defined twice: expected unique link names")
+        links[link.name] = link
+    joints: dict[str, Any] = {}
+    parent_of: dict[str, Any] = {}
+    children: dict[str, list[Any]] = {name: [] for name in links}
+    moving = 0
+    for joint in robot.joints:
+        if joint.name in joints:
+            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: defined twice: expected unique joint names")
+        joints[joint.name] = joint
+        for role, name in (("parent", joint.parent), ("child", joint.child)):
+            if name not in links:
+                raise RobotDescriptionError(f"{path}, joint {joint.name!r}: {role} link {name!r} is not a <link> of the file")
+        if joint.type in _REFUSED:
+            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: type {joint.type!r} refused: {_REFUSED[joint.type]}")
+        if joint.type not in (*_MOVING, "fixed"):
+            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: type {joint.type!r}: expected revolute, "
+                                        "continuous, prismatic or fixed")
+        moving += joint.type in _MOVING
+        if moving > MAX_MOVING_JOINTS:
+            raise RobotDescriptionError(f"{path}: more than {MAX_MOVING_JOINTS} moving joints: above the joint-count limit")
+        if joint.child in parent_of:
+            raise RobotDescriptionError(
+                f"{path}, joint {joint.name!r}: link {joint.child!r} already has the parent joint "
+                f"{parent_of[joint.child].name!r}: a closed chain, which a serial model cannot represent")
+        parent_of[joint.child] = joint
+        children[joint.parent].append(joint)
+    roots = [name for name in links if name not in parent_of]
+    if len(roots) != 1:
+        detail = f"roots {_listing(roots)}" if roots else "every link has a parent (a loop)"
+        raise RobotDescriptionError(f"{path}: expected one root link, found {detail}")
+    base = roots[0] if base_link is None else base_link
+    if base not in links:
+        raise RobotDescriptionError(f"{path}: base_link {base!r} is not a link of the file; the links are {_listing(links)}")
+    below = _subtree(base, children)
+    if tip_link is None:
+        leaves = [name for name in below if not children[name]]
+        if len(leaves) != 1:
+            raise RobotDescriptionError(f"{path}: the tree branches below {base!r} into the leaves {_listing(leaves)}: "
+                                        "name the end of the arm with tip_link")
+        tip_link = leaves[0]
+    elif tip_link not in below:
+        where = "is not a link of the file" if tip_link not in links else f"is not below base_link {base!r}"
+        raise RobotDescriptionError(f"{path}: tip_link {tip_link!r} {where}; the links below {base!r} are {_listing(below)}")
+    path_joints = []
+    name = tip_link
+    while name != base:
+        path_joints.append(parent_of[name])
+        name = parent_of[name].parent
+    path_joints.reverse()
+    on_chain = {j.name for j in path_joints}
+    for joint in path_joints:
+        if joint.mimic is not None and joint.type != "fixed":
+            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: a mimic joint (it follows {joint.mimic.joint!r}) "
+                                        "cannot be a joint of the serial model")
+
+    def hanging(link_name: str, T: np.ndarray) -> list[tuple[float, np.ndarray, np.ndarray]]:
+        """The bodies of ``link_name`` and of everything off the chain below it, in the frame where it sits at T."""
+        out = []
+        stack = [(link_name, T)]
+        while stack:
+            current, T_cur = stack.pop()
+            m, c, I = _body(path, links[current])
+            R = T_cur[:3, :3]
+            out.append((m, R @ c + T_cur[:3, 3], R @ I @ R.T))
+            for joint in children[current]:
+                if joint.name not in on_chain:
+                    stack.append((joint.child, T_cur @ _origin(path, f"joint {joint.name!r}", joint.origin)))
+        return out
+
+    chain: list[ChainJoint] = []
+    pending = np.eye(4)  # fixed joints since the last moving joint, in its link frame
+    bodies: list[tuple[float, np.ndarray, np.ndarray]] = []
+    spec: dict[str, Any] | None = None
+
+    def close_link() -> None:
+        if spec is not None:
+            chain.append(ChainJoint(**spec, **dict(zip(("mass", "com", "inertia"), _lump(bodies)))))
+
+    for joint in path_joints:
+        T = pending @ _origin(path, f"joint {joint.name!r}", joint.origin)
+        if joint.type == "fixed":
+            pending = T
+            if spec is not None:
+                bodies += hanging(joint.child, T)
+            continue
+        close_link()
+        spec = dict(name=joint.name, joint="prismatic" if joint.type == "prismatic" else "revolute", origin=T,
+                    axis=_unit_axis(path, joint), qlim=_limit(path, joint), ignored_dynamics=_ignored_dynamics(path, joint))
+        pending = np.eye(4)
+        bodies = hanging(joint.child, np.eye(4))
+    close_link()
+    if not chain:
+        raise RobotDescriptionError(f"{path}: no moving joint between {base!r} and {tip_link!r}: expected at least one")
+    # descendants of the tip that hang below it were collected by hanging(); the tip pose is what is pending
+    return UrdfChain(robot_name=str(robot.name), base_link=base, tip_link=tip_link, joints=tuple(chain), tip=pending)
+
+
+def _subtree(base: str, children: Mapping[str, list[Any]]) -> list[str]:
+    out, stack = [], [base]
+    while stack:
+        name = stack.pop()
+        out.append(name)
+        stack.extend(j.child for j in children[name])
+    return out
+
+
+# --------------------------------------------------------------------------- description
+
+
+class _JointWhere(_Where):
+    """Error messages that name the URDF joint (``[joints.NAME]``) instead of a link number."""
+
+    def __init__(self, path: str, names: Sequence[str]) -> None:
+        super().__init__(path)
+        self.names = names
+
+    def fail(self, link: int | None, fieldname: str, value: Any, expected: str) -> RobotDescriptionError:
+        if link is None:
+            return super().fail(link, fieldname, value, expected)
+        return RobotDescriptionError(f"{self.path}, joint {self.names[link]!r}: field '{fieldname}' = {value!r}: "
+                                     f"expected {expected}")
+
+
+def _pose16(T: np.ndarray) -> tuple[float, ...] | None:
+    return None if np.array_equal(T, np.eye(4)) else tuple(float(v) for v in np.asarray(T).ravel())
+
+
+def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None = None,
+                          path: str | Path | None = None) -> RobotDescription:
+    """A :class:`RobotDescription` (convention ``"urdf"``) from a URDF file and optional TOML data.
+
+    Parameters
+    ----------
+    urdf_path
+        The URDF file.
+    data
+        The parsed TOML of a robot file that points at the URDF (``urdf = ...``): ``name``,
+        ``base_link``, ``tip_link``, ``[joints.NAME]`` motor data, ``gravity`` (m/s^2, world frame),
+        ``rest``, ``tool``, ... ; None for a bare URDF (name from ``<robot name>``).
+    path
+        The file named in error messages (the TOML file; default ``urdf_path``).
+
+    Raises
+    ------
+    RobotDescriptionError
+        One line naming the file, the joint or key, the value and what was expected.
+    """
+    urdf_path = Path(urdf_path)
+    where = str(path if path is not None else urdf_path)
+    data = dict(data or {})
+    w = _Where(where)
+    for key in data:
+        if key not in _TOML_KEYS:
+            raise w.fail(None, key, data[key], f"one of the known keys of a URDF robot file ({', '.join(_TOML_KEYS)}); "
+                                               "this key is unknown")
+    for key in ("base_link", "tip_link"):
+        if key in data and not isinstance(data[key], str):
+            raise w.fail(None, key, data[key], "a URDF link name (a string)")
+    robot = read_urdf(urdf_path)
+    chain = serial_chain(robot, urdf_path, data.get("base_link"), data.get("tip_link"))
+    names = [j.name for j in chain.joints]
+    motors = data.get("joints", {})
+    if not isinstance(motors, Mapping):
+        raise w.fail(None, "joints", motors, "a table of [joints.NAME] tables")
+    for name, table in motors.items():
+        if name not in names:
+            raise w.fail(None, f"joints.{name}", table, f"a moving joint of the chain ({', '.join(names)}); "
+                                                          f"{name!r} is not one")
+        if not isinstance(table, Mapping):
+            raise w.fail(None, f"joints.{name}", table, "a table of motor data")
+        for key in table:
+            if key not in MOTOR_KEYS:
+                raise w.fail(None, f"joints.{name}.{key}", table[key], f"one of the motor keys ({', '.join(MOTOR_KEYS)})")
+    silent = [j.name for j in chain.joints if j.ignored_dynamics and j.name not in motors]
+    if silent:
+        warnings.warn(f"{urdf_path}: <dynamics damping friction> of joint(s) {', '.join(silent)} ignored: friction "
+                      "comes from [joints.NAME] in a robot TOML file", URDFDynamicsIgnoredWarning, stacklevel=3)
+    jw = _JointWhere(where, names)
+    links = []
+    for i, cj in enumerate(chain.joints):
+        ixx, iyy, izz, ixy, iyz, ixz = (cj.inertia[0, 0], cj.inertia[1, 1], cj.inertia[2, 2], cj.inertia[0, 1],
+                                        cj.inertia[1, 2], cj.inertia[0, 2])
+        fields: dict[str, Any] = {
+            "joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0, "name": cj.name,
+            "mass": cj.mass, "com": [float(v) for v in cj.com], "inertia": [float(v) for v in (ixx, iyy, izz, ixy, iyz, ixz)],
+            **motors.get(cj.name, {}),
+        }
+        if cj.qlim is not None:
+            fields["qlim"] = list(cj.qlim)
+        link = _link(jw, i, fields)
+        links.append(dataclasses.replace(link, origin=tuple(float(v) for v in cj.origin.ravel()),
+                                         axis=tuple(float(v) for v in cj.axis)))
+    # Top-level keys (gravity, rest, tool, tasks, ...) are checked by the TOML reader on a DH skeleton of
+    # the same joints; its links are then replaced by the URDF ones.
+    skeleton = {key: data[key] for key in _PASSED_ON if key in data}
+    skeleton.setdefault("name", chain.robot_name)
+    skeleton["links"] = [{"joint": lk.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
+                          **({"qlim": list(lk.qlim)} if lk.qlim is not None else {})} for lk in links]
+    desc = description_from_dict(skeleton, where)
+    return dataclasses.replace(desc, links=tuple(links), convention="urdf", tip=_pose16(chain.tip))
+
+
+def description_from_urdf_toml(data: Mapping[str, Any], path: str | Path) -> RobotDescription:
+    """A :class:`RobotDescription` from a robot TOML file whose ``urdf`` key names a URDF (relative to the TOML)."""
+    urdf = data["urdf"]
+    if not isinstance(urdf, str) or not urdf:
+        raise _Where(str(path)).fail(None, "urdf", urdf, "the path of a URDF file, relative to this file")
+    urdf_path = Path(path).resolve().parent / urdf
+    if not urdf_path.is_file():
+        raise _Where(str(path)).fail(None, "urdf", urdf, f"the path of a URDF file relative to this file; {urdf_path} does not exist")
+    return description_from_urdf(urdf_path, {k: v for k, v in data.items() if k != "urdf"}, path)

@@ -1,0 +1,132 @@
+"""Robots to URDF: any :class:`~model.description.RobotDescription` written as a URDF file.
+
+The description's :class:`~model.chain.Chain` is already URDF's picture (joint placements,
+unit axes, bodies in the moved joint frames): each joint becomes a URDF joint with that
+placement as ``<origin>`` and that axis (flip applied), each body a link ``<inertial>``.
+``base`` becomes a fixed joint from a ``world`` link, the tip and the tool fixed joints to
+the leaves ``flange`` and ``tool``. Joint limits become ``<limit>`` (a revolute joint without limits is
+``continuous``, a prismatic one gets lower = upper = 0, which reads back as no limit).
+
+URDF has no place for motor data or gravity: :func:`companion_toml` writes the robot
+TOML that points at the URDF and restores them, so that URDF + TOML is the same model.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .chain import build_chain
+from .description import RobotDescription
+
+__all__ = ["urdf_text", "companion_toml", "write_atomic", "export_urdf"]
+
+
+def _joint_names(desc: RobotDescription) -> list[str]:
+    names = [lk.name for lk in desc.links]
+    reserved = {"base_joint", "flange_joint", "tool_joint"}
+    if all(names) and len(set(names)) == len(names) and not reserved & set(names):
+        return names
+    return [f"joint{i}" for i in range(1, desc.n + 1)]
+
+
+def urdf_text(desc: RobotDescription) -> str:
+    """The URDF XML of ``desc``: links ``base_link``, ``link1``..``linkN``, ``flange`` (the tip), ``tool``
+    if the description has one, ``world`` if it has a base pose; inertials and limits included."""
+    from lxml import etree
+    from yourdfpy import URDF, Inertial, Joint, Limit, Link, Robot
+
+    chain = build_chain(desc)
+    links = [Link(name="base_link")]
+    joints = []
+    if desc.base is not None:
+        links.insert(0, Link(name="world"))
+        joints.append(Joint(name="base_joint", type="fixed", parent="world", child="base_link", origin=chain.base))
+    parent = "base_link"
+    for i, (name, link) in enumerate(zip(_joint_names(desc), desc.links)):
+        child = f"link{i + 1}"
+        com = np.eye(4)
+        com[:3, 3] = chain.com[i]
+        links.append(Link(name=child, inertial=Inertial(origin=com, mass=float(chain.mass[i]), inertia=chain.inertia[i])))
+        effort = 0.0 if link.torque_limit is None else abs(link.gear_ratio) * link.torque_limit
+        if link.qlim is not None:
+            kind, limit = link.joint, Limit(effort=effort, velocity=0.0, lower=link.qlim[0], upper=link.qlim[1])
+        elif link.is_revolute:
+            kind, limit = "continuous", None
+        else:
+            kind, limit = "prismatic", Limit(effort=effort, velocity=0.0, lower=0.0, upper=0.0)
+        joints.append(Joint(name=name, type=kind, parent=parent, child=child, origin=chain.placements[i],
+                            axis=chain.axes[i], limit=limit))
+        parent = child
+    links.append(Link(name="flange"))
+    joints.append(Joint(name="flange_joint", type="fixed", parent=parent, child="flange", origin=chain.tip))
+    if desc.tool is not None:
+        links.append(Link(name="tool"))
+        joints.append(Joint(name="tool_joint", type="fixed", parent="flange", child="tool", origin=chain.tool))
+    robot = Robot(name=desc.name, links=links, joints=joints)
+    urdf = URDF(robot=robot, build_scene_graph=False, load_meshes=False)
+    return etree.tostring(urdf.write_xml(), pretty_print=True, xml_declaration=True, encoding="UTF-8").decode()
+
+
+def _toml_number(x: float) -> str:
+    return repr(float(x))
+
+
+def companion_toml(desc: RobotDescription, urdf_name: str) -> str:
+    """A robot TOML pointing at ``urdf_name`` (relative to the TOML) that restores what URDF cannot hold:
+    the name, gravity, rest pose and per-joint motor data."""
+    names = _joint_names(desc)
+    lines = [f"# {desc.name} as URDF ({urdf_name}) plus what URDF cannot hold: gravity, rest pose and motor data.",
+             "# Written by manip export-urdf. SI units: m, rad, kg, kg m^2, N m s/rad, N m (motor side).",
+             f"name = {json.dumps(desc.name)}",
+             f"urdf = {json.dumps(urdf_name)}",
+             f"tip_link = {json.dumps('tool' if desc.tool is not None else 'flange')}",
+             f"gravity = [{', '.join(_toml_number(g) for g in desc.gravity)}]"]
+    if desc.rest is not None:
+        lines.append(f"rest = [{', '.join(_toml_number(v) for v in desc.rest)}]")
+    for name, link in zip(names, desc.links):
+        lines += ["", f"[joints.{name}]", f"motor_inertia = {_toml_number(link.motor_inertia)}",
+                  f"gear_ratio = {_toml_number(link.gear_ratio)}", f"viscous_friction = {_toml_number(link.viscous_friction)}",
+                  f"coulomb_friction = [{_toml_number(link.coulomb_friction[0])}, {_toml_number(link.coulomb_friction[1])}]",
+                  f"rotor_mass = {_toml_number(link.rotor_mass)}"]
+        if link.torque_limit is not None:
+            lines.append(f"torque_limit = {_toml_number(link.torque_limit)}")
+    return "\n".join(lines) + "\n"
+
+
+def write_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def export_urdf(desc: RobotDescription, path: str | Path, toml: str | Path | None = None) -> list[Path]:
+    """Write ``desc`` as URDF to ``path`` and, if ``toml`` is given, the companion robot TOML; returns the files.
+
+    Raises
+    ------
+    FileNotFoundError
+        The output folder does not exist.
+    """
+    path = Path(path)
+    for target in (path, *(() if toml is None else (Path(toml),))):
+        if not target.parent.is_dir():
+            raise FileNotFoundError(f"{target}: the folder {target.parent} does not exist")
+    written = [write_atomic(path, urdf_text(desc))]
+    if toml is not None:
+        toml = Path(toml)
+        rel = os.path.relpath(path.resolve(), toml.resolve().parent)
+        written.append(write_atomic(toml, companion_toml(desc, Path(rel).as_posix())))
+    return written
