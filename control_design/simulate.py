@@ -170,10 +170,10 @@ def default_substeps(plant: Robot, dt: float, q0: np.ndarray) -> int:
     """RK4 sub-steps per control period: ``h <= MAX_SUBSTEP`` and ``h * lambda_friction <= 0.5``.
 
     ``lambda_friction`` is the largest eigenvalue of ``B(q0)^-1 diag(G^2 B_m)``, the plant's
-    fastest open-loop decay rate (1/s), with the plant's current friction parameters.
+    fastest open-loop decay rate (1/s), with the plant's friction parameters.
     """
     G = plant.gear_ratio
-    B_m = plant.dynamics.p[plant.dynamics.layout.slices["viscous_friction"]]
+    B_m = plant.parameters.viscous_friction
     Binv_F = np.linalg.solve(plant.inertia(q0), np.diag(G * G * B_m))
     lam = float(np.max(np.abs(np.linalg.eigvals(Binv_F))))
     return max(1, math.ceil(dt / MAX_SUBSTEP - 1e-9), math.ceil(dt * lam / _STIFF_MARGIN - 1e-9))
@@ -226,7 +226,12 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
         raise DesignSpecError(f"substeps: expected >= 1, got {substeps!r}")
     h = dt / substeps
     G = plant.gear_ratio
-    accel = plant.dynamics.accel  # compiled C; Robot.accel adds only a shape check
+    p, ws = plant.parameters, plant.dynamics.workspace()
+    dyn_accel = plant.dynamics.accel  # compiled C; Robot.accel adds only a shape check
+
+    def accel(q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        return dyn_accel(q, qd, tau, p, ws=ws)
+
     Q = np.empty((steps + 1, n))
     QD = np.empty((steps + 1, n))
     TAU = np.empty((steps + 1, n))

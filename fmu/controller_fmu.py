@@ -89,7 +89,7 @@ def _model_params(robot: Robot, uses: str) -> tuple[list[Quantity], np.ndarray, 
     tunable = [not nm.startswith("gravity") for nm in layout.names]
     lo: list[float | None] = [0.0 if nm.split("[")[0] in nonneg else None for nm in layout.names]
     hi: list[float | None] = [0.0 if nm.split("[")[0] == "coulomb_friction_neg" else None for nm in layout.names]
-    return quantities, robot.dynamics.p, tunable, lo, hi
+    return quantities, robot.parameters.vector.copy(), tunable, lo, hi
 
 
 def controller_spec(controller: Controller, robot: Robot, *, model_identifier: str | None = None) -> ModelSpec:

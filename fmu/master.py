@@ -219,7 +219,7 @@ def _plant_start_values(plant: Robot, sched: _Schedule) -> dict[str, float]:
     n = plant.n
     values = {f"q[{i + 1}]": float(sched.q0[i]) for i in range(n)}
     values.update({f"qd[{i + 1}]": float(sched.qd0[i]) for i in range(n)})
-    values.update(dict(zip(plant.dynamics.layout.names, (float(v) for v in plant.dynamics.p))))
+    values.update(plant.parameters.as_dict())
     values["internal_step"] = sched.dt / sched.substeps
     return values
 
