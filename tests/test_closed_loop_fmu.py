@@ -1,7 +1,7 @@
 """Closed loops through FMUs: the plant FMU with the Python controller, with controller FMUs, and in libcosim.
 
 Every run is the seed's SCARA pick-and-place (15 s, 1 kHz) compared with the pure
-Python loop :func:`control_design.simulate.simulate_tracking` driving the same
+Python loop :func:`closed_loop.simulate_tracking` driving the same
 controller, sample by sample.
 
 Tolerances. Both loops hold the torque over the period and integrate the same
@@ -29,14 +29,13 @@ import warnings
 import numpy as np
 import pytest
 
-from control_design import design_robot, plant_with_mismatch, reference_task, simulate_tracking
+from closed_loop import (OnePeriodDelay, closed_loop_through_fmu, controller_fmu_kind, controller_spec,
+                         export_controller_fmu, run_closed_loop, run_libcosim_closed_loop, simulate_tracking,
+                         validate_controller_fmu)
+from control_design import NO_LIMIT, design_robot, plant_with_mismatch, reference_task
 from control_design.computed_torque import ModelMismatch
 from control_design.controllers import DecentralisedController
 from control_design.errors import SimulationDivergedError
-from fmu import (controller_fmu_kind, export_controller_fmu, run_closed_loop, run_libcosim_closed_loop,
-                 validate_controller_fmu)
-from fmu.controller_fmu import NO_LIMIT, controller_spec
-from fmu.master import OnePeriodDelay, closed_loop_through_fmu
 from model import InertiaConsistencyWarning, load_robot
 
 from fmu_support import heavy_scara_fmu, scara_fmu

@@ -13,7 +13,7 @@ from control_design.errors import DesignSpecError
 from control_design.loops import gains_arrays
 from control_design.reference import Reference
 from control_design.responses import closed_loop_bandwidth, margins, step_response
-from control_design.simulate import simulate_tracking
+from closed_loop import simulate_tracking
 from model.robot import load_robot
 from model.trajectory import jtraj
 

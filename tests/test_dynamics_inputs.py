@@ -74,7 +74,7 @@ def test_joint_vector_accepts_row_and_column(scara, shape):
 
 
 def test_substeps_follow_the_plant_friction_as_set():
-    from control_design.simulate import default_substeps
+    from closed_loop import default_substeps
 
     plant = load_robot("planar2r")
     q0 = plant.q_rest
