@@ -176,50 +176,47 @@ class Robot:
         other._parameters = p
         return other
 
-    def _p(self, p: "DynamicsParameters | None") -> "DynamicsParameters | None":
-        return self._parameters if p is None else p
-
     def inertia(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included.
 
         ``p`` (every dynamics method): parameters to use instead of :attr:`parameters`; ``ws``: a
         :class:`~model.dynamics.Workspace` of ``self.dynamics`` for a hot loop.
         """
-        return self.dynamics.inertia(q, self._p(p), ws=ws)
+        return self.dynamics.inertia(q, self._parameters if p is None else p, ws=ws)
 
     def coriolis(self, q: Any, qd: Any, p: "DynamicsParameters | None" = None, *,
                  ws: "Workspace | None" = None) -> np.ndarray:
         """(n, n) Coriolis/centrifugal matrix C(q, qd) from Christoffel symbols."""
-        return self.dynamics.coriolis(q, qd, self._p(p), ws=ws)
+        return self.dynamics.coriolis(q, qd, self._parameters if p is None else p, ws=ws)
 
     def gravload(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) gravity torque g(q): the joint torque that holds the arm still."""
-        return self.dynamics.gravload(q, self._p(p), ws=ws)
+        return self.dynamics.gravload(q, self._parameters if p is None else p, ws=ws)
 
     def friction(self, qd: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) friction torque F(qd) the joints must overcome: G^2 B qd + |G| Tc(sign qd).
 
         Note the sign: the Robotics Toolbox's ``Link.friction`` returns ``-F``.
         """
-        return self.dynamics.friction(qd, self._p(p), ws=ws)
+        return self.dynamics.friction(qd, self._parameters if p is None else p, ws=ws)
 
     def rne(self, q: Any, qd: Any, qdd: Any, p: "DynamicsParameters | None" = None, *,
             ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint torques for the motion (inverse dynamics), motor and friction terms included."""
-        return self.dynamics.rne(q, qd, qdd, self._p(p), ws=ws)
+        return self.dynamics.rne(q, qd, qdd, self._parameters if p is None else p, ws=ws)
 
     def accel(self, q: Any, qd: Any, tau: Any, p: "DynamicsParameters | None" = None, *,
               ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint accelerations under joint torques ``tau`` (forward dynamics)."""
-        return self.dynamics.accel(q, qd, tau, self._p(p), ws=ws)
+        return self.dynamics.accel(q, qd, tau, self._parameters if p is None else p, ws=ws)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays."""
-        return self.dynamics.rne_batch(Q, QD, QDD, self._p(p))
+        return self.dynamics.rne_batch(Q, QD, QDD, self._parameters if p is None else p)
 
     def accel_batch(self, Q: Any, QD: Any, TAU: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) forward dynamics of N states given as (N, n) arrays."""
-        return self.dynamics.accel_batch(Q, QD, TAU, self._p(p))
+        return self.dynamics.accel_batch(Q, QD, TAU, self._parameters if p is None else p)
 
 
 def load_robot(name_or_path: str | Path, motor_model: str = "reflected") -> Robot:

@@ -7,8 +7,8 @@ controller, sample by sample.
 Tolerances. Both loops hold the torque over the period and integrate the same
 ODE with classical RK4 at the same sub-step (``internal_step = dt / substeps``,
 one sub-step here); the compiled right-hand sides perform the same operations
-(no FMA contraction: neither build targets it), and the controller FMUs compute
-the law with the Python controller's operations in its order. The only
+(no FMA contraction: neither build targets it), and the controller FMUs run the
+Python controller's own law Function (control_design.laws). The only
 arithmetic that differs is the association of RK4's final weighted sum
 (``k1 + 2 (k2 + k3) + k4`` in C, ``k1 + 2 k2 + 2 k3 + k4`` in Python): at most
 about one ulp of the state per step. Summed coherently over N = 15 000 steps with

@@ -98,7 +98,7 @@ class Dynamics:
         self.motor_model = check_motor_model(motor_model)
         self.n = description.n
         self.layout: ParameterLayout = parameter_layout(description)
-        self.parameters = DynamicsParameters.defaults(self.layout)
+        self._defaults = DynamicsParameters.defaults(self.layout)
         self._library: CompiledLibrary | None = None
         self._build_info: BuildInfo | None = None
         self._fallback = False
@@ -111,6 +111,11 @@ class Dynamics:
         return f"Dynamics({self.description.name!r}, motor_model={self.motor_model!r}, {state})"
 
     # ------------------------------------------------------------ parameters
+    @property
+    def parameters(self) -> DynamicsParameters:
+        """The description's parameters (no payload, its friction and gravity): the default ``p``."""
+        return self._defaults
+
     def check_parameters(self, p: Any) -> DynamicsParameters:
         """``p`` if it is a :class:`DynamicsParameters` of this model's layout; a ValueError otherwise."""
         if type(p) is DynamicsParameters and p.layout is self.layout:
@@ -193,7 +198,7 @@ class Dynamics:
         argument order so that the first bad argument raises its usual error. The parameter vector
         is read in place. Returns a fresh array.
         """
-        params = self.parameters if p is None else self.check_parameters(p)
+        params = self._defaults if p is None else self.check_parameters(p)
         lib = self._library if self._library is not None else self._backend()
         if lib is None:
             n = self.n
