@@ -4,7 +4,7 @@ Run as ``python -m benchmarks.bench_closed_loop`` (``--kinds pd ct``, ``--repeat
 ``--libcosim``). The SCARA plant FMU and one controller FMU per kind are built in
 the same run; each loop is timed end to end (instantiation included, exports
 not) and the best of ``--repeat`` runs is kept. Peer: the pure Python loop
-:func:`control_design.simulate.simulate_tracking` with the same controller
+:func:`closed_loop.simulate_tracking` with the same controller
 (compiled dynamics, RK4 in numpy), timed the same way. Rows:
 
 * ``python``: ``simulate_tracking`` (the peer);
@@ -46,8 +46,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.repeat < 1:
         parser.error(f"--repeat: expected at least 1, got {args.repeat}")
 
-    from control_design import design_robot, reference_task, simulate_tracking
-    from fmu import export_controller_fmu, export_fmu, run_closed_loop, run_libcosim_closed_loop
+    from closed_loop import export_controller_fmu, run_closed_loop, run_libcosim_closed_loop, simulate_tracking
+    from control_design import design_robot, reference_task
+    from fmu import export_fmu
     from model import InertiaConsistencyWarning, load_robot
 
     with warnings.catch_warnings():

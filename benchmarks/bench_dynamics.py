@@ -135,7 +135,7 @@ def joints_table(N: int) -> None:
         say(f"{name}: {'cached' if info.cached else 'built'} in {time.perf_counter() - t0:.1f} s")
         rng = np.random.default_rng(7)
         Q, QD, QDD = (np.ascontiguousarray(a) for a in rng.uniform(-2, 2, (3, N, robot.n)))
-        p = robot.dynamics.p
+        p = robot.parameters.vector
         ns = {k: time_best(lambda k=k: lib.evaluate(k, [Q, QD, QDD, p], N)) / N * 1e9 for k in names}
         ops = {k: getattr(f, k).n_instructions() for k in names}
         rows.append((name, n, ns, ops))

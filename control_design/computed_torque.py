@@ -123,20 +123,21 @@ def _scaled_description(robot: Robot, scale: float) -> RobotDescription:
 def plant_with_mismatch(robot: Robot, mismatch: ModelMismatch) -> Robot:
     """A new :class:`Robot` for the simulated plant: ``robot`` changed by ``mismatch``.
 
-    The controller keeps using ``robot``; the payload and friction go through the
-    plant's dynamics parameters (``set_payload``, ``set_friction``), the mass scaling
-    through a scaled description (compiled once, then cached).
+    The controller keeps using ``robot``; the payload and friction are the plant's
+    parameters (``robot.parameters`` changed by ``with_payload``, ``with_friction``;
+    without a mass scaling the plant shares ``robot``'s compiled model), the mass
+    scaling a scaled description (compiled once, then cached).
     """
-    desc = robot.description if mismatch.link_mass_scale == 1.0 else _scaled_description(robot, mismatch.link_mass_scale)
-    plant = Robot(desc, motor_model=robot.motor_model)
+    if mismatch.link_mass_scale == 1.0:
+        plant = robot
+    else:
+        plant = Robot(_scaled_description(robot, mismatch.link_mass_scale), motor_model=robot.motor_model)
+    params = robot.parameters  # the same layout for a scaled description
     if mismatch.payload_mass:
-        plant.dynamics.set_payload(mismatch.payload_mass, mismatch.payload_com, mismatch.payload_inertia)
+        params = params.with_payload(mismatch.payload_mass, mismatch.payload_com, mismatch.payload_inertia)
     if mismatch.friction_scale != 1.0:
-        p = robot.dynamics.p
-        lay = robot.dynamics.layout
         s = mismatch.friction_scale
-        plant.dynamics.set_friction(viscous=s * p[lay.slices["viscous_friction"]],
-                                    coulomb_pos=s * p[lay.slices["coulomb_friction_pos"]],
-                                    coulomb_neg=s * p[lay.slices["coulomb_friction_neg"]])
-    return plant
+        params = params.with_friction(*(s * params.field(f) for f in ("viscous_friction", "coulomb_friction_pos",
+                                                                       "coulomb_friction_neg")))
+    return plant.with_parameters(params)
 

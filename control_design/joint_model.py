@@ -135,7 +135,7 @@ def coupling_torques(robot: Robot, traj: Trajectory, J_eff_m: np.ndarray) -> Cou
     """
     G = robot.gear_ratio
     G2 = G * G
-    B_m = np.array([lk.viscous_friction for lk in robot.description.links])
+    B_m = robot.parameters.viscous_friction
     N, n = traj.q.shape
     parts = {k: np.zeros((N, n)) for k in ("inertial", "inertia_variation", "coriolis", "gravity", "friction")}
     for k in range(N):
@@ -323,11 +323,12 @@ def decoupled_model(robot: Robot, reference: Trajectory, n_samples: int = DEFAUL
     peaks = coupling.peak()
     g_ws = np.max(np.abs(np.array([robot.gravload(q) for q in Q])), axis=0)
     limits = torque_limits(robot, reference, Q)
+    B_m = robot.parameters.viscous_friction
     joints = []
     for i, link in enumerate(robot.description.links):
         joints.append(JointModel(
             index=i, name=link.name or f"joint{i + 1}", unit="rad" if link.is_revolute else "m",
-            G=float(link.gear_ratio), Jm=float(link.motor_inertia), B_m=float(link.viscous_friction),
+            G=float(link.gear_ratio), Jm=float(link.motor_inertia), B_m=float(B_m[i]),
             J_eff_m_min=float(J_min[i]), J_eff_m_mean=float(J_mean[i]), J_eff_m_max=float(J_max[i]),
             J_eff_m=float(J_design[i]), rule=rule,
             coupling_peak_j={k: float(v[i]) for k, v in peaks.items()},

@@ -3,7 +3,8 @@
 Data flow: :mod:`fmu.variables` (the one variable table) -> :mod:`fmu.build`
 (CasADi C, the wrapper of ``fmu/c/``, gcc, zip) -> :mod:`fmu.simulate` (FMPy)
 and :mod:`fmu.cosim` (libcosim) -> :mod:`fmu.validate` (all of it checked
-against the Python model).
+against the Python model). It exports and validates any model spec and knows
+nothing of controllers: closed loops through FMUs are :mod:`closed_loop`.
 """
 
 __version__ = "0.1.0"
@@ -15,35 +16,7 @@ from .validate import ValidationReport, validate_fmu
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
 
-# The closed-loop names need control_design (python-control, SciPy: ~0.8 s to import):
-# loaded on first access, so ``import fmu`` stays light.
-_LAZY = {
-    "ControllerFmuReport": "controller_fmu", "controller_fmu_kind": "controller_fmu",
-    "controller_spec": "controller_fmu", "export_controller_fmu": "controller_fmu",
-    "validate_controller_fmu": "controller_fmu",
-    "OnePeriodDelay": "master", "closed_loop_through_fmu": "master", "run_closed_loop": "master",
-    "run_libcosim_closed_loop": "master",
-}
-
-
-def __getattr__(name: str) -> object:
-    if name in _LAZY:
-        import importlib
-
-        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 __all__ = [
-    "ControllerFmuReport",
-    "OnePeriodDelay",
-    "closed_loop_through_fmu",
-    "controller_fmu_kind",
-    "controller_spec",
-    "export_controller_fmu",
-    "run_closed_loop",
-    "run_libcosim_closed_loop",
-    "validate_controller_fmu",
     "CosimError",
     "CosimResult",
     "FmuBuildError",

@@ -15,7 +15,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-__all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "libcosim_unavailable", "run_libcosim"]
+__all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "add_slave", "last_error", "libcosim_unavailable",
+           "run_libcosim"]
 
 NS_PER_S = 1_000_000_000
 
@@ -46,7 +47,8 @@ class CosimResult:
     values: dict[str, np.ndarray]
 
 
-def _last_error() -> str:
+def last_error() -> str:
+    """libcosim's last error message (or a placeholder when it has none)."""
     from libcosimpy._internal import get_last_error_message
 
     try:
@@ -55,7 +57,7 @@ def _last_error() -> str:
         return "no message from libcosim"
 
 
-def _add_slave(execution: Any, path: Path, name: str) -> tuple[Any, int]:
+def add_slave(execution: Any, path: Path, name: str) -> tuple[Any, int]:
     """Load ``path`` as libcosim slave ``name`` and add it to ``execution``: (the slave, its index).
 
     The slave must outlive ``execution``; the caller holds it.
@@ -64,10 +66,10 @@ def _add_slave(execution: Any, path: Path, name: str) -> tuple[Any, int]:
 
     slave = CosimLocalSlave(str(path), name)
     if not slave.ptr():  # a NULL slave would crash cosim_execution_add_slave
-        raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {_last_error()}")
+        raise CosimError(f"libcosim could not load {path.name} as instance {name!r}: {last_error()}")
     index = execution.add_local_slave(slave)
     if index is None or index < 0:
-        raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {_last_error()}")
+        raise CosimError(f"libcosim refused instance {name!r} of {path.name}: {last_error()}")
     return slave, index
 
 
@@ -126,7 +128,7 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     slaves = []
     indices: dict[str, int] = {}
     for name in instances:
-        slave, index = _add_slave(execution, path, name)
+        slave, index = add_slave(execution, path, name)
         slaves.append(slave)
         indices[name] = index
 
@@ -139,12 +141,12 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
         references[index] = refs
         for var, value in (start_values or {}).items():
             if not execution.real_initial_value(index, refs[var], float(value)):
-                raise CosimError(f"libcosim refused the initial value {var} = {value}: {_last_error()}")
+                raise CosimError(f"libcosim refused the initial value {var} = {value}: {last_error()}")
 
     manipulator = CosimManipulator.create_override()
     observer = CosimObserver.create_last_value()
     if not execution.add_manipulator(manipulator) or not execution.add_observer(observer):
-        raise CosimError(f"libcosim refused the manipulator or the observer: {_last_error()}")
+        raise CosimError(f"libcosim refused the manipulator or the observer: {last_error()}")
 
     t = np.arange(1, n_steps + 1) * step  # t0 + k h from the step counter, after each step
     values = {name: np.zeros((n_steps, len(output_names))) for name in indices}
@@ -161,12 +163,12 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
         for index in indices.values():
             vrs = [references[index][n] for n in input_names]
             if not manipulator.slave_real_values(index, vrs, u):
-                raise CosimError(f"libcosim refused the inputs at t = {time}: {_last_error()}")
+                raise CosimError(f"libcosim refused the inputs at t = {time}: {last_error()}")
 
     for k in range(n_steps):
         apply(k * step)
         if not execution.step(1):
-            raise CosimError(f"libcosim step {k + 1} (t = {k * step:.6g} s) failed: {_last_error()}")
+            raise CosimError(f"libcosim step {k + 1} (t = {k * step:.6g} s) failed: {last_error()}")
         sample(k)
     del execution  # before the slaves, manipulator and observer it uses
     del observer, manipulator, slaves

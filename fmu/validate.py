@@ -627,7 +627,8 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
         # reference chatters without end. The comparison runs without it, in all three models.
         p_ref[coulomb] = 0.0
         start = {plant.param_names[i]: 0.0 for i in coulomb}
-        robot.dynamics.set_friction(coulomb_pos=np.zeros(n), coulomb_neg=np.zeros(n))
+        robot = robot.with_parameters(robot.parameters.with_friction(coulomb_pos=np.zeros(n),
+                                                                     coulomb_neg=np.zeros(n)))
         report.notes.append("Coulomb friction set to 0 for the comparison (a switch at qd = 0: an open-loop arm "
                             "that sticks makes a tight-tolerance reference chatter)")
     _say(progress, f"computed-torque feed-forward over {t_end:g} s")

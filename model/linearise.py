@@ -61,7 +61,7 @@ def linearise(robot: Robot, q0: Any, qd0: Any = None, u0: Any = None, outputs: s
     Parameters
     ----------
     robot
-        The robot (its motor model and ``robot.dynamics`` parameters are used).
+        The robot (its motor model and its ``parameters`` are used).
     q0
         (n,) joint positions, rad / m.
     qd0
@@ -82,7 +82,7 @@ def linearise(robot: Robot, q0: Any, qd0: Any = None, u0: Any = None, outputs: s
     q0v = as_joint_vector(q0, n, "q0")
     qd0v = np.zeros(n) if qd0 is None else as_joint_vector(qd0, n, "qd0")
     G = robot.gear_ratio
-    u0v = robot.dynamics.rne(q0v, qd0v, np.zeros(n)) / G if u0 is None else as_joint_vector(u0, n, "u0")
+    u0v = robot.rne(q0v, qd0v, np.zeros(n)) / G if u0 is None else as_joint_vector(u0, n, "u0")
     C, out_names = _output_matrix(robot, outputs)
 
     plant = build_plant(robot)
@@ -92,7 +92,7 @@ def linearise(robot: Robot, q0: Any, qd0: Any = None, u0: Any = None, outputs: s
     xdot = plant.ode(x, u, p)
     jac = ca.Function("linearisation", [x, u, p], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
                       ["x", "u", "p"], ["A", "B"])
-    A, B = (np.array(m) for m in jac(np.concatenate([q0v, qd0v]), u0v, robot.dynamics.p))
+    A, B = (np.array(m) for m in jac(np.concatenate([q0v, qd0v]), u0v, robot.parameters.vector))
     D = np.zeros((C.shape[0], n))
     return control.ss(
         A, B, C, D,

@@ -19,7 +19,7 @@ from .description import RobotDescription, load_description
 from .kinematics import KinematicsFunctions, build_kinematics
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .dynamics import Dynamics
+    from .dynamics import Dynamics, DynamicsParameters, Workspace
     from .ik import IKResult, IKSolution
     from .singularity import SingularityReport
 
@@ -48,6 +48,14 @@ class Robot:
     motor_model
         ``"reflected"`` (Robotics Toolbox convention, default) or ``"full"``
         (rotors as bodies carried by the preceding link); affects dynamics only.
+
+    Notes
+    -----
+    A Robot is a constant model and one immutable parameter value
+    (:attr:`parameters`: payload, friction, gravity; the description's by
+    default). :meth:`with_parameters` gives another Robot with other values
+    that shares this one's compiled model; nothing changes a Robot's numbers
+    after it is made.
     """
 
     def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
@@ -55,6 +63,7 @@ class Robot:
             raise ValueError(f"motor_model: expected 'reflected' or 'full', got {motor_model!r}")
         self.description = description
         self.motor_model = motor_model
+        self._parameters: "DynamicsParameters | None" = None  # None: the description's
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, n={self.n}, joints={self.description.joint_types!r}, motor_model={self.motor_model!r})"
@@ -149,40 +158,65 @@ class Robot:
 
         return Dynamics(self.description, motor_model=self.motor_model)
 
-    def inertia(self, q: Any) -> np.ndarray:
-        """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included."""
-        return self.dynamics.inertia(q)
+    @property
+    def parameters(self) -> "DynamicsParameters":
+        """This robot's dynamics parameters (payload, friction, gravity): an immutable value."""
+        p = self._parameters
+        return self.dynamics.parameters if p is None else p
 
-    def coriolis(self, q: Any, qd: Any) -> np.ndarray:
+    def with_parameters(self, parameters: "DynamicsParameters") -> "Robot":
+        """A Robot with other dynamics parameters, sharing this one's model (and its compiled code).
+
+        ``parameters`` is a :class:`~model.dynamics.DynamicsParameters` of this robot's layout,
+        e.g. ``robot.parameters.with_payload(2.0)``; ``self`` is left unchanged.
+        """
+        p = self.dynamics.check_parameters(parameters)
+        other = Robot.__new__(Robot)
+        other.__dict__.update(self.__dict__)  # description, motor model, kinematics and the same Dynamics
+        other._parameters = p
+        return other
+
+    def inertia(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
+        """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included.
+
+        ``p`` (every dynamics method): parameters to use instead of :attr:`parameters`; ``ws``: a
+        :class:`~model.dynamics.Workspace` of ``self.dynamics`` for a hot loop.
+        """
+        return self.dynamics.inertia(q, self._parameters if p is None else p, ws=ws)
+
+    def coriolis(self, q: Any, qd: Any, p: "DynamicsParameters | None" = None, *,
+                 ws: "Workspace | None" = None) -> np.ndarray:
         """(n, n) Coriolis/centrifugal matrix C(q, qd) from Christoffel symbols."""
-        return self.dynamics.coriolis(q, qd)
+        return self.dynamics.coriolis(q, qd, self._parameters if p is None else p, ws=ws)
 
-    def gravload(self, q: Any) -> np.ndarray:
+    def gravload(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) gravity torque g(q): the joint torque that holds the arm still."""
-        return self.dynamics.gravload(q)
+        return self.dynamics.gravload(q, self._parameters if p is None else p, ws=ws)
 
-    def friction(self, qd: Any) -> np.ndarray:
+    def friction(self, qd: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) friction torque F(qd) the joints must overcome: G^2 B qd + |G| Tc(sign qd).
 
         Note the sign: the Robotics Toolbox's ``Link.friction`` returns ``-F``.
         """
-        return self.dynamics.friction(qd)
+        return self.dynamics.friction(qd, self._parameters if p is None else p, ws=ws)
 
-    def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+    def rne(self, q: Any, qd: Any, qdd: Any, p: "DynamicsParameters | None" = None, *,
+            ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint torques for the motion (inverse dynamics), motor and friction terms included."""
-        return self.dynamics.rne(q, qd, qdd)
+        return self.dynamics.rne(q, qd, qdd, self._parameters if p is None else p, ws=ws)
 
-    def accel(self, q: Any, qd: Any, tau: Any) -> np.ndarray:
+    def accel(self, q: Any, qd: Any, tau: Any, p: "DynamicsParameters | None" = None, *,
+              ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint accelerations under joint torques ``tau`` (forward dynamics)."""
-        return self.dynamics.accel(q, qd, tau)
+        return self.dynamics.accel(q, qd, tau, self._parameters if p is None else p, ws=ws)
 
-    def rne_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
+    def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays."""
-        return self.dynamics.rne_batch(Q, QD, QDD)
+        return self.dynamics.rne_batch(Q, QD, QDD, self._parameters if p is None else p)
 
-    def accel_batch(self, Q: Any, QD: Any, TAU: Any) -> np.ndarray:
+    def accel_batch(self, Q: Any, QD: Any, TAU: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) forward dynamics of N states given as (N, n) arrays."""
-        return self.dynamics.accel_batch(Q, QD, TAU)
+        return self.dynamics.accel_batch(Q, QD, TAU, self._parameters if p is None else p)
 
 
 def load_robot(name_or_path: str | Path, motor_model: str = "reflected") -> Robot:

@@ -1,14 +1,14 @@
 """Closed loops through FMUs: the plant FMU with the Python controller, with controller FMUs, and in libcosim.
 
 Every run is the seed's SCARA pick-and-place (15 s, 1 kHz) compared with the pure
-Python loop :func:`control_design.simulate.simulate_tracking` driving the same
+Python loop :func:`closed_loop.simulate_tracking` driving the same
 controller, sample by sample.
 
 Tolerances. Both loops hold the torque over the period and integrate the same
 ODE with classical RK4 at the same sub-step (``internal_step = dt / substeps``,
 one sub-step here); the compiled right-hand sides perform the same operations
-(no FMA contraction: neither build targets it), and the controller FMUs compute
-the law with the Python controller's operations in its order. The only
+(no FMA contraction: neither build targets it), and the controller FMUs run the
+Python controller's own law Function (control_design.laws). The only
 arithmetic that differs is the association of RK4's final weighted sum
 (``k1 + 2 (k2 + k3) + k4`` in C, ``k1 + 2 k2 + 2 k3 + k4`` in Python): at most
 about one ulp of the state per step. Summed coherently over N = 15 000 steps with
@@ -29,14 +29,13 @@ import warnings
 import numpy as np
 import pytest
 
-from control_design import design_robot, plant_with_mismatch, reference_task, simulate_tracking
+from closed_loop import (OnePeriodDelay, closed_loop_through_fmu, controller_fmu_kind, controller_spec,
+                         export_controller_fmu, run_closed_loop, run_libcosim_closed_loop, simulate_tracking,
+                         validate_controller_fmu)
+from control_design import NO_LIMIT, design_robot, plant_with_mismatch, reference_task
 from control_design.computed_torque import ModelMismatch
 from control_design.controllers import DecentralisedController
 from control_design.errors import SimulationDivergedError
-from fmu import (controller_fmu_kind, export_controller_fmu, run_closed_loop, run_libcosim_closed_loop,
-                 validate_controller_fmu)
-from fmu.controller_fmu import NO_LIMIT, controller_spec
-from fmu.master import OnePeriodDelay, closed_loop_through_fmu
 from model import InertiaConsistencyWarning, load_robot
 
 from fmu_support import heavy_scara_fmu, scara_fmu

@@ -29,13 +29,13 @@ def _robot(name, motor_model="reflected"):
 def test_compiled_matches_symbolic(name, motor_model):
     """1e-12 relative to the output's magnitude: same operations, same order, only compiler rounding may differ."""
     dyn = _robot(name, motor_model).dynamics
-    dyn.set_payload(1.2, (0.01, 0.02, 0.03), (0.01, 0.02, 0.03, 0.001, 0.002, 0.003))
-    dyn.set_friction(coulomb_pos=np.full(dyn.n, 0.1), coulomb_neg=np.full(dyn.n, -0.2))
+    params = dyn.parameters.with_payload(1.2, (0.01, 0.02, 0.03), (0.01, 0.02, 0.03, 0.001, 0.002, 0.003))
+    params = params.with_friction(coulomb_pos=np.full(dyn.n, 0.1), coulomb_neg=np.full(dyn.n, -0.2))
     dyn.compile()
     rng = np.random.default_rng(41)
     N = 50
     X = rng.uniform(-2, 2, (3, N, dyn.n))
-    p = dyn.p
+    p = params.vector
     for fname in COMPILED_FUNCTIONS:
         f = getattr(dyn.functions, fname)
         inputs = [X[k] for k in range(f.n_in() - 1)] + [p]
@@ -84,11 +84,11 @@ def test_without_compiler_falls_back_to_casadi(monkeypatch, tmp_path):
     q, qd, qdd = np.array([0.1, 0.2]), np.array([0.3, -0.4]), np.array([1.0, 2.0])
     with pytest.warns(NoCompilerWarning, match="CC: no C compiler found"):
         tau = dyn.rne(q, qd, qdd)
-    expected = np.array(dyn.functions.rne(q, qd, qdd, dyn.p)).ravel()
+    expected = np.array(dyn.functions.rne(q, qd, qdd, dyn.parameters.vector)).ravel()
     np.testing.assert_allclose(tau, expected, rtol=1e-14)
     Q = np.tile(q, (3, 1))
     np.testing.assert_allclose(dyn.rne_batch(Q, Q * 0 + qd, Q * 0 + qdd), np.tile(expected, (3, 1)), rtol=1e-14)
-    np.testing.assert_allclose(dyn.inertia(q), np.array(dyn.functions.inertia(q, dyn.p)), rtol=1e-14)
+    np.testing.assert_allclose(dyn.inertia(q), np.array(dyn.functions.inertia(q, dyn.parameters.vector)), rtol=1e-14)
     assert not list(tmp_path.glob("*.so"))
 
 

@@ -13,7 +13,7 @@ from control_design.errors import DesignSpecError
 from control_design.loops import gains_arrays
 from control_design.reference import Reference
 from control_design.responses import closed_loop_bandwidth, margins, step_response
-from control_design.simulate import simulate_tracking
+from closed_loop import simulate_tracking
 from model.robot import load_robot
 from model.trajectory import jtraj
 
@@ -84,7 +84,7 @@ def test_payload_mismatch_builds_a_separate_plant(scara):
     q = np.array([0.0, 0.0, 1.0, 0.0])
     # The quill carries the payload: 2 kg more weight on joint 3, nothing else changes; the model keeps none.
     assert plant.gravload(q)[2] - scara.gravload(q)[2] == pytest.approx(-2.0 * 9.81, rel=1e-12)
-    assert scara.dynamics.p[scara.dynamics.layout.slices["payload_mass"]][0] == 0.0
+    assert scara.parameters.payload_mass == 0.0 and plant.parameters.payload_mass == 2.0
     assert plant.inertia(q)[2, 2] - scara.inertia(q)[2, 2] == pytest.approx(2.0, rel=1e-12)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from model import load_robot
+from model.dynamics import DynamicsParameters
 
 
 @pytest.fixture(scope="module")
@@ -24,26 +25,34 @@ def scara():
         ("viscous_friction[3]", -1e-3, "p: viscous: expected values >= 0"),
     ],
 )
-def test_set_parameters_checks_every_field_and_is_atomic(scara, index_name, value, message):
-    dyn = scara.dynamics
-    before = dyn.p
-    p = before.copy()
-    p[dyn.layout.names.index(index_name)] = value
-    p[dyn.layout.names.index("gravity[3]")] = -1.0  # a valid change that must not land either
+def test_a_parameter_vector_is_checked_field_by_field(scara, index_name, value, message):
+    layout = scara.dynamics.layout
+    before = scara.parameters
+    p = before.vector.copy()
+    p[layout.names.index(index_name)] = value
     with pytest.raises(ValueError, match=re.escape(message)):
-        dyn.set_parameters(p)
-    np.testing.assert_array_equal(dyn.p, before)
+        DynamicsParameters(layout, p)
+    assert scara.parameters == before
 
 
-def test_set_parameters_accepts_a_valid_vector(scara):
-    dyn = scara.dynamics
-    p = dyn.p.copy()
-    p[dyn.layout.names.index("payload_mass")] = 2.0
-    dyn.set_parameters(p)
-    try:
-        assert dyn.p[dyn.layout.names.index("payload_mass")] == 2.0
-    finally:
-        dyn.reset_parameters()
+def test_a_valid_parameter_vector_is_accepted_and_read_only(scara):
+    layout = scara.dynamics.layout
+    p = scara.parameters.vector.copy()
+    p[layout.names.index("payload_mass")] = 2.0
+    params = DynamicsParameters(layout, p)
+    assert params.payload_mass == 2.0
+    with pytest.raises(ValueError, match="read-only"):
+        params.vector[0] = 1.0
+    p[0] = 5.0  # the value kept its own copy
+    assert params.payload_mass == 2.0
+
+
+def test_parameters_of_another_layout_are_refused(scara):
+    other = load_robot("planar2r")
+    with pytest.raises(ValueError, match=re.escape("p: expected the parameters of 'scara'")):
+        scara.rne(np.zeros(4), np.zeros(4), np.zeros(4), other.parameters)
+    with pytest.raises(ValueError, match=re.escape("p: expected DynamicsParameters")):
+        scara.rne(np.zeros(4), np.zeros(4), np.zeros(4), scara.parameters.vector)
 
 
 def test_batch_rejects_non_finite_rows(scara):
@@ -65,10 +74,11 @@ def test_joint_vector_accepts_row_and_column(scara, shape):
 
 
 def test_substeps_follow_the_plant_friction_as_set():
-    from control_design.simulate import default_substeps
+    from closed_loop import default_substeps
 
     plant = load_robot("planar2r")
     q0 = plant.q_rest
     base = default_substeps(plant, 1e-3, q0)
-    plant.dynamics.set_friction(viscous=[50.0, 50.0])  # 5000x the file's: a stiff friction pole
-    assert default_substeps(plant, 1e-3, q0) > base
+    stiff = plant.with_parameters(plant.parameters.with_friction(viscous=[50.0, 50.0]))  # 5000x the file's
+    assert default_substeps(stiff, 1e-3, q0) > base
+    assert default_substeps(plant, 1e-3, q0) == base

@@ -76,9 +76,9 @@ def test_energy_is_conserved_without_friction_and_torque(name, motor_model):
     """
     robot = _robot(name, motor_model)
     n = robot.n
-    robot.dynamics.set_friction(np.zeros(n), np.zeros(n), np.zeros(n))
+    robot = robot.with_parameters(robot.parameters.with_friction(np.zeros(n), np.zeros(n), np.zeros(n)))
     energy = robot.dynamics.functions.energy
-    p = robot.dynamics.p
+    p = robot.parameters.vector
     rng = np.random.default_rng(33)
     x0 = np.concatenate([robot.q_rest + rng.uniform(-0.5, 0.5, n), rng.uniform(-1.0, 1.0, n)])
     zero = np.zeros(n)
@@ -103,18 +103,19 @@ def test_energy_is_conserved_without_friction_and_torque(name, motor_model):
 @pytest.mark.parametrize("name", ["scara", "puma560"])
 def test_payload_changes_numbers_without_rebuild_and_matches_pinocchio(name):
     pin = pytest.importorskip("pinocchio")
-    robot = _robot(name)
-    dyn = robot.dynamics
-    n = robot.n
-    dyn.set_friction(np.zeros(n), np.zeros(n), np.zeros(n))
+    base = _robot(name)
+    dyn = base.dynamics
+    n = base.n
+    robot = base.with_parameters(base.parameters.with_friction(np.zeros(n), np.zeros(n), np.zeros(n)))
     rng = np.random.default_rng(34)
     q, qd, qdd = rng.uniform(-2, 2, (3, n))
     tau_without = robot.rne(q, qd, qdd)
     library = dyn._library
     info = dyn.build_info
     payload = (2.5, np.array([0.02, -0.01, 0.05]), np.array([0.01, 0.012, 0.008, 0.001, -0.002, 0.0005]))
-    dyn.set_payload(*payload)
-    tau_with = robot.rne(q, qd, qdd)
+    loaded = robot.with_parameters(robot.parameters.with_payload(*payload))
+    tau_with = loaded.rne(q, qd, qdd)
+    np.testing.assert_array_equal(robot.rne(q, qd, qdd), tau_without)  # the unloaded robot is unchanged
     assert dyn._library is library and dyn.build_info is info  # no rebuild, same compiled code
     assert np.abs(tau_with - tau_without).max() > 1e-3
 
@@ -122,22 +123,22 @@ def test_payload_changes_numbers_without_rebuild_and_matches_pinocchio(name):
     data = model.createData()
     scale = max(1.0, np.abs(tau_with).max())
     np.testing.assert_allclose(tau_with, pin.rnea(model, data, q, qd, qdd), rtol=0, atol=1e-10 * scale)
-    np.testing.assert_allclose(robot.inertia(q), symmetric_from_upper(pin.crba(model, data, q)), rtol=0, atol=1e-10 * scale)
-    np.testing.assert_allclose(robot.gravload(q), pin.computeGeneralizedGravity(model, data, q), rtol=0, atol=1e-10 * scale)
-    np.testing.assert_allclose(robot.accel(q, qd, tau_with), qdd, rtol=0, atol=1e-9 * max(1.0, np.abs(qdd).max()))
+    np.testing.assert_allclose(loaded.inertia(q), symmetric_from_upper(pin.crba(model, data, q)), rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(loaded.gravload(q), pin.computeGeneralizedGravity(model, data, q), rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(loaded.accel(q, qd, tau_with), qdd, rtol=0, atol=1e-9 * max(1.0, np.abs(qdd).max()))
 
 
-def test_set_payload_rejects_bad_values():
-    dyn = _robot("planar2r").dynamics
+def test_with_payload_friction_gravity_reject_bad_values():
+    p = _robot("planar2r").parameters
     with pytest.raises(ValueError, match=r"^mass: expected a finite number >= 0"):
-        dyn.set_payload(-1.0)
+        p.with_payload(-1.0)
     with pytest.raises(ValueError, match=r"^com: expected 3 values"):
-        dyn.set_payload(1.0, com=(0.0, 0.0))
+        p.with_payload(1.0, com=(0.0, 0.0))
     with pytest.raises(ValueError, match=r"^inertia: expected a positive semi-definite"):
-        dyn.set_payload(1.0, inertia=(-1.0, 0, 0, 0, 0, 0))
+        p.with_payload(1.0, inertia=(-1.0, 0, 0, 0, 0, 0))
     with pytest.raises(ValueError, match=r"^coulomb_neg: expected values <= 0"):
-        dyn.set_friction(coulomb_neg=[0.1, 0.0])
+        p.with_friction(coulomb_neg=[0.1, 0.0])
     with pytest.raises(ValueError, match=r"^viscous: expected 2 values"):
-        dyn.set_friction(viscous=[0.1])
+        p.with_friction(viscous=[0.1])
     with pytest.raises(ValueError, match=r"^gravity: expected 3 values"):
-        dyn.set_gravity([0.0, -9.81])
+        p.with_gravity([0.0, -9.81])

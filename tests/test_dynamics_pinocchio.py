@@ -51,21 +51,18 @@ def test_fkine_matches_pinocchio(setup):
 
 def test_rigid_body_terms_match_pinocchio(setup):
     robot, model, data = setup
-    dyn = robot.dynamics
-    dyn.set_friction(np.zeros(robot.n), np.zeros(robot.n), np.zeros(robot.n))
-    try:
-        for q, qd, qdd in states(robot.n, 2):
-            close(robot.inertia(q), symmetric_from_upper(pin.crba(model, data, q)))
-            g = pin.computeGeneralizedGravity(model, data, q)
-            close(robot.gravload(q), g)
-            C = robot.coriolis(q, qd)
-            close(C @ qd, pin.nonLinearEffects(model, data, q, qd) - g)
-            close(C, pin.computeCoriolisMatrix(model, data, q, qd))
-            tau = pin.rnea(model, data, q, qd, qdd)
-            close(robot.rne(q, qd, qdd), tau)
-            close(robot.accel(q, qd, tau), pin.aba(model, data, q, qd, tau))
-    finally:
-        dyn.reset_parameters()
+    robot = robot.with_parameters(robot.parameters.with_friction(np.zeros(robot.n), np.zeros(robot.n),
+                                                                 np.zeros(robot.n)))
+    for q, qd, qdd in states(robot.n, 2):
+        close(robot.inertia(q), symmetric_from_upper(pin.crba(model, data, q)))
+        g = pin.computeGeneralizedGravity(model, data, q)
+        close(robot.gravload(q), g)
+        C = robot.coriolis(q, qd)
+        close(C @ qd, pin.nonLinearEffects(model, data, q, qd) - g)
+        close(C, pin.computeCoriolisMatrix(model, data, q, qd))
+        tau = pin.rnea(model, data, q, qd, qdd)
+        close(robot.rne(q, qd, qdd), tau)
+        close(robot.accel(q, qd, tau), pin.aba(model, data, q, qd, tau))
 
 
 def test_rne_and_accel_include_friction(setup):

@@ -23,7 +23,7 @@ import pytest
 from control_design.computed_torque import ModelMismatch, plant_with_mismatch
 from control_design.design import design_robot
 from control_design.reference import reference_task
-from control_design.simulate import simulate_tracking
+from closed_loop import simulate_tracking
 from model.robot import load_robot
 
 pytestmark = pytest.mark.filterwarnings("ignore::model.description.InertiaConsistencyWarning")

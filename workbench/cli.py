@@ -15,6 +15,7 @@ from typing import Sequence
 import numpy as np
 
 import model
+from closed_loop.commands import register as register_closed_loop
 from control_design.commands import register as register_control
 from fmu.commands import register as register_fmu
 from model.commands import register as register_model
@@ -107,6 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_build)
     register_model(sub)
     register_control(sub)
+    register_closed_loop(sub)
     register_fmu(sub)
     p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")
     p.add_argument("--robot", default="scara", help="built-in name or TOML file (default scara)")

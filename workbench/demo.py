@@ -19,12 +19,12 @@ from typing import Callable, TextIO
 import numpy as np
 
 import fmu
-from control_design import design_robot, reference_task, simulate_tracking
-from control_design.reference import reference_task_name
-from control_design.commands import save_design_plots, save_tracking_plots, write_json
+from closed_loop import TrackingResult, closed_loop_through_fmu, simulate_tracking
+from closed_loop.commands import save_tracking_plots
+from control_design import design_robot, reference_task
+from control_design.commands import save_design_plots, write_json
 from control_design.design import RobotDesign
-from control_design.simulate import TrackingResult
-from fmu.master import closed_loop_through_fmu
+from control_design.reference import reference_task_name
 from model.robot import load_robot
 
 from .animation import animate_arm

@@ -2,15 +2,18 @@
 
 from .core import Dynamics, NoCompilerWarning
 from .motors import MOTOR_MODELS
-from .parameters import ParameterLayout, parameter_layout
+from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
 from .symbolic import DynamicsFunctions, build_functions
+from .workspace import Workspace
 
 __all__ = [
     "Dynamics",
     "DynamicsFunctions",
+    "DynamicsParameters",
     "MOTOR_MODELS",
     "NoCompilerWarning",
     "ParameterLayout",
+    "Workspace",
     "build_functions",
     "parameter_layout",
 ]

@@ -19,11 +19,12 @@ import casadi as ca
 import numpy as np
 
 from ..arrays import finite_vector, shaped_vector
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, PointEvaluator, build_library
+from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, build_library
 from ..description import RobotDescription
 from .motors import check_motor_model
-from .parameters import ParameterLayout, parameter_layout
+from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
 from .symbolic import COMPILED_FUNCTIONS, DynamicsFunctions, build_functions
+from .workspace import Workspace
 
 __all__ = ["Dynamics", "NoCompilerWarning", "source_fingerprint"]
 
@@ -72,7 +73,7 @@ def _batch(value: Any, n: int, name: str) -> np.ndarray:
 
 
 class Dynamics:
-    """Dynamic model ``B(q) qdd + C(q, qd) qd + F(qd) + g(q) = tau`` of one robot.
+    """Dynamic model ``B(q) qdd + C(q, qd) qd + F(qd) + g(q) = tau`` of one robot: constant once built.
 
     Parameters
     ----------
@@ -83,10 +84,14 @@ class Dynamics:
 
     Notes
     -----
-    Payload, friction and gravity are the parameter vector :attr:`p`; change
-    them with :meth:`set_payload`, :meth:`set_friction`, :meth:`set_gravity`
-    or :meth:`set_parameters` without rebuilding anything. Joint quantities are
-    in rad, m and their derivatives; torques in N m (revolute) or N (prismatic).
+    Payload, friction and gravity are an explicit, immutable
+    :class:`~model.dynamics.parameters.DynamicsParameters` value: every numeric
+    method takes one as ``p`` (default :attr:`parameters`, the description's),
+    and :meth:`~DynamicsParameters.with_payload` and friends make new values
+    without rebuilding anything. Buffers live in a
+    :class:`~model.dynamics.workspace.Workspace` (``ws=``; by default one is
+    borrowed from this model's pool for the call). Joint quantities are in rad,
+    m and their derivatives; torques in N m (revolute) or N (prismatic).
     """
 
     def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
@@ -94,13 +99,13 @@ class Dynamics:
         self.motor_model = check_motor_model(motor_model)
         self.n = description.n
         self.layout: ParameterLayout = parameter_layout(description)
-        self._p = self.layout.defaults.copy()
+        self._defaults = DynamicsParameters.defaults(self.layout)
         self._library: CompiledLibrary | None = None
         self._build_info: BuildInfo | None = None
         self._fallback = False
         self._lock = threading.Lock()
-        # Per-thread single-point evaluators (buffers are not shareable between threads); replaced on compile.
-        self._points = threading.local()
+        # Idle workspaces of the current library, borrowed for one call (list.pop / append are atomic).
+        self._pool: list[Workspace] = []
 
     def __repr__(self) -> str:
         state = "compiled" if self._library else ("casadi" if self._fallback else "not built")
@@ -108,81 +113,31 @@ class Dynamics:
 
     # ------------------------------------------------------------ parameters
     @property
-    def p(self) -> np.ndarray:
-        """(np,) copy of the current parameter vector (see :mod:`model.dynamics.parameters`)."""
-        return self._p.copy()
+    def parameters(self) -> DynamicsParameters:
+        """The description's parameters (no payload, its friction and gravity): the default ``p``."""
+        return self._defaults
 
-    def set_parameters(self, p: Any) -> None:
-        """Replace the whole parameter vector (layout :attr:`layout`), checked by the same rules as the setters.
+    def check_parameters(self, p: Any) -> DynamicsParameters:
+        """``p`` if it is a :class:`DynamicsParameters` of this model's layout; a ValueError otherwise."""
+        if type(p) is DynamicsParameters and p.layout is self.layout:
+            return p
+        if not isinstance(p, DynamicsParameters):
+            raise ValueError(f"p: expected DynamicsParameters (e.g. dynamics.parameters.with_payload(...)), "
+                             f"got {type(p).__name__}")
+        if p.layout.names != self.layout.names:
+            raise ValueError(f"p: expected the parameters of {self.description.name!r} ({self.layout.size} values), "
+                             f"got a layout of {p.layout.size}")
+        return p
 
-        On a bad value nothing changes and the ValueError names the field.
+    def workspace(self) -> Workspace:
+        """A new :class:`~model.dynamics.workspace.Workspace` of this model (compiles it if needed).
+
+        Raises :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
         """
-        p = _vector(p, self.layout.size, "p")
-        sl, before = self.layout.slices, self._p
-        try:
-            self.set_payload(p[sl["payload_mass"]][0], p[sl["payload_com"]], p[sl["payload_inertia"]])
-            self.set_friction(p[sl["viscous_friction"]], p[sl["coulomb_friction_pos"]], p[sl["coulomb_friction_neg"]])
-            self.set_gravity(p[sl["gravity"]])
-        except ValueError as exc:
-            self._p = before
-            raise ValueError(f"p: {exc}") from None
-
-    def reset_parameters(self) -> None:
-        """Back to the description's friction and gravity, no payload."""
-        self._p = self.layout.defaults.copy()
-
-    def _set(self, field: str, value: np.ndarray) -> None:
-        p = self._p.copy()
-        p[self.layout.slices[field]] = value
-        self._p = p
-
-    def set_payload(self, mass: float, com: Sequence[float] = (0.0, 0.0, 0.0),
-                    inertia: Sequence[float] = (0.0,) * 6) -> None:
-        """Rigid payload fixed to frame n.
-
-        Parameters
-        ----------
-        mass
-            kg, >= 0 (0 removes the payload).
-        com
-            (3,) centre of mass in frame n, m.
-        inertia
-            (6,) ``[Ixx Iyy Izz Ixy Iyz Ixz]`` about the payload COM, frame-n axes, kg m^2 (zeros: point mass).
-        """
-        m = float(mass)
-        if not np.isfinite(m) or m < 0:
-            raise ValueError(f"mass: expected a finite number >= 0 kg, got {m!r}")
-        c = _vector(com, 3, "com")
-        inertia6 = _vector(inertia, 6, "inertia")
-        ixx, iyy, izz, ixy, iyz, ixz = inertia6
-        eig = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
-        if eig[0] < -1e-12 * max(1.0, abs(eig).max()):
-            raise ValueError(f"inertia: expected a positive semi-definite inertia, got {inertia6.tolist()} (eigenvalues {eig.tolist()})")
-        self._set("payload_mass", np.array([m]))
-        self._set("payload_com", c)
-        self._set("payload_inertia", inertia6)
-
-    def set_friction(self, viscous: Any = None, coulomb_pos: Any = None, coulomb_neg: Any = None) -> None:
-        """Motor-side friction per joint: viscous (N m s/rad, >= 0), Coulomb Tc+ (>= 0) and Tc- (<= 0), N m.
-
-        Arguments left as None keep their current values.
-        """
-        checks = (
-            ("viscous", "viscous_friction", viscous, 1.0, ">= 0"),
-            ("coulomb_pos", "coulomb_friction_pos", coulomb_pos, 1.0, ">= 0"),
-            ("coulomb_neg", "coulomb_friction_neg", coulomb_neg, -1.0, "<= 0"),
-        )
-        for name, field, value, sign, expect in checks:
-            if value is None:
-                continue
-            v = _vector(value, self.n, name)
-            if np.any(sign * v < 0):
-                raise ValueError(f"{name}: expected values {expect}, got {v.tolist()}")
-            self._set(field, v)
-
-    def set_gravity(self, gravity: Any) -> None:
-        """Gravitational acceleration in the base frame, (3,) m/s^2."""
-        self._set("gravity", _vector(gravity, 3, "gravity"))
+        if self._backend() is None:
+            raise CompilerNotFoundError("no compiled library: a workspace needs the compiled dynamics")
+        assert self._library is not None
+        return Workspace(self._library)
 
     # ------------------------------------------------------------- symbolic
     @cached_property
@@ -210,7 +165,7 @@ class Dynamics:
             funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
             self._library, self._build_info = build_library(stem, key, funcs)
             self._fallback = False
-            self._points = threading.local()
+            self._pool = []
             return self._build_info
 
     def _backend(self) -> CompiledLibrary | None:
@@ -233,80 +188,91 @@ class Dynamics:
         rows, cols_per_point = f.size1_out(0), f.size2_out(0)
         return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
 
-    def _new_point(self, name: str) -> PointEvaluator | None:
-        """This thread's :class:`PointEvaluator` of ``name`` (parameter input bound to ``p``); None on the CasADi fallback."""
-        lib = self._backend()
-        if lib is None:
-            return None
-        points = self._points
-        ev = lib.point_evaluator(name, {len(lib.signatures[name].in_sizes) - 1: self._p})
-        setattr(points, name, ev)
-        return ev
-
-    def _point(self, name: str, values: tuple[Any, ...], names: tuple[str, ...]) -> np.ndarray:
-        """(numel,) first output of Function ``name`` at one point: the joint vectors ``values`` and :attr:`p`.
+    def _point(self, name: str, values: tuple[Any, ...], names: tuple[str, ...], p: DynamicsParameters | None,
+               ws: Workspace | None) -> np.ndarray:
+        """(numel,) first output of Function ``name`` at one point: the joint vectors ``values`` and ``p``.
 
         Same checks, messages and bits as ``_eval`` on ``_vector`` of each value, without per-call
-        allocation: the values are copied into this thread's preallocated buffers (a float64 vector of
-        the right shape directly, anything else through ``_shaped``), checked finite at once (a finite
-        sum implies finite terms), and on any failure re-checked one by one by ``_vector`` in argument
-        order so that the first bad argument raises its usual error. Returns a fresh array.
+        allocation: the values are copied into the workspace's preallocated buffers (a float64 vector
+        of the right shape directly, anything else through ``_shaped``), checked finite at once (a
+        finite sum implies finite terms), and on any failure re-checked one by one by ``_vector`` in
+        argument order so that the first bad argument raises its usual error. The parameter vector
+        is read in place. Returns a fresh array.
         """
-        ev: PointEvaluator | None = getattr(self._points, name, None)
-        if ev is None:
-            ev = self._new_point(name)
-            if ev is None:
-                n = self.n
-                return self._eval(name, [*(_vector(v, n, k, "joint values") for v, k in zip(values, names)), self._p], 1)[0]
-        error: Exception | None = None
+        params = self._defaults if p is None else self.check_parameters(p)
+        lib = self._library if self._library is not None else self._backend()
+        if lib is None:
+            n = self.n
+            return self._eval(name, [*(_vector(v, n, k, "joint values") for v, k in zip(values, names)),
+                                     params.vector], 1)[0]
+        borrowed = ws is None
+        if borrowed:
+            pool = self._pool
+            try:
+                ws = pool.pop()
+            except IndexError:
+                ws = Workspace(lib)
+        elif ws.library is not lib:
+            raise ValueError("ws: expected a workspace of this model's current library (make it with workspace())")
         try:
-            for v, buf, k in zip(values, ev.inputs, names):
-                if type(v) is np.ndarray and v.dtype is _F64 and v.shape == buf.shape:
-                    buf[...] = v
-                else:
-                    buf[...] = _shaped(v, self.n, k)
-            ok = math.isfinite(sum(ev.block.tolist()))
-        except Exception as exc:  # noqa: BLE001 - re-raised below in argument order
-            error, ok = exc, False
-        if not ok:  # raises the error of the first bad argument; a mere overflow of the sum passes
-            for v, k in zip(values, names):
-                _vector(v, self.n, k, "joint values")
-            if error is not None:
-                raise error
-        p = self._p
-        if ev.bound[-1] is not p:
-            ev.bind(len(ev.bound) - 1, p)
-        ev()
-        return ev.outputs[0].copy()
+            ev = ws.point(name)
+            error: Exception | None = None
+            try:
+                for v, buf, k in zip(values, ev.inputs, names):
+                    if type(v) is np.ndarray and v.dtype is _F64 and v.shape == buf.shape:
+                        buf[...] = v
+                    else:
+                        buf[...] = _shaped(v, self.n, k)
+                ok = math.isfinite(sum(ev.block.tolist()))
+            except Exception as exc:  # noqa: BLE001 - re-raised below in argument order
+                error, ok = exc, False
+            if not ok:  # raises the error of the first bad argument; a mere overflow of the sum passes
+                for v, k in zip(values, names):
+                    _vector(v, self.n, k, "joint values")
+                if error is not None:
+                    raise error
+            pv = params.vector
+            if ev.bound[-1] is not pv:
+                ev.bind(len(ev.bound) - 1, pv)
+            ev()
+            return ev.outputs[0].copy()
+        finally:
+            if borrowed and ws.library is self._library:
+                self._pool.append(ws)
 
     # --------------------------------------------------------------- numeric
-    def inertia(self, q: Any) -> np.ndarray:
-        """(n, n) joint-space inertia B(q) (motor inertia included)."""
+    def inertia(self, q: Any, p: DynamicsParameters | None = None, *, ws: Workspace | None = None) -> np.ndarray:
+        """(n, n) joint-space inertia B(q) (motor inertia included); ``p`` default :attr:`parameters`."""
         n = self.n
-        return self._point("inertia", (q,), ("q",)).reshape(n, n, order="F")
+        return self._point("inertia", (q,), ("q",), p, ws).reshape(n, n, order="F")
 
-    def coriolis(self, q: Any, qd: Any) -> np.ndarray:
+    def coriolis(self, q: Any, qd: Any, p: DynamicsParameters | None = None, *,
+                 ws: Workspace | None = None) -> np.ndarray:
         """(n, n) Coriolis/centrifugal matrix C(q, qd) (Christoffel symbols of the first kind)."""
         n = self.n
-        return self._point("coriolis", (q, qd), ("q", "qd")).reshape(n, n, order="F")
+        return self._point("coriolis", (q, qd), ("q", "qd"), p, ws).reshape(n, n, order="F")
 
-    def gravload(self, q: Any) -> np.ndarray:
+    def gravload(self, q: Any, p: DynamicsParameters | None = None, *, ws: Workspace | None = None) -> np.ndarray:
         """(n,) gravity torque g(q) (payload included)."""
-        return self._point("gravload", (q,), ("q",))
+        return self._point("gravload", (q,), ("q",), p, ws)
 
-    def friction(self, qd: Any) -> np.ndarray:
+    def friction(self, qd: Any, p: DynamicsParameters | None = None, *, ws: Workspace | None = None) -> np.ndarray:
         """(n,) friction torque F(qd) the joints must overcome (= -RTB ``Link.friction``)."""
-        return self._point("friction", (qd,), ("qd",))
+        return self._point("friction", (qd,), ("qd",), p, ws)
 
-    def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+    def rne(self, q: Any, qd: Any, qdd: Any, p: DynamicsParameters | None = None, *,
+            ws: Workspace | None = None) -> np.ndarray:
         """(n,) joint torques ``B qdd + C qd + g + F`` (Newton-Euler)."""
-        return self._point("rne", (q, qd, qdd), ("q", "qd", "qdd"))
+        return self._point("rne", (q, qd, qdd), ("q", "qd", "qdd"), p, ws)
 
-    def accel(self, q: Any, qd: Any, tau: Any) -> np.ndarray:
+    def accel(self, q: Any, qd: Any, tau: Any, p: DynamicsParameters | None = None, *,
+              ws: Workspace | None = None) -> np.ndarray:
         """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)``."""
-        return self._point("accel", (q, qd, tau), ("q", "qd", "tau"))
+        return self._point("accel", (q, qd, tau), ("q", "qd", "tau"), p, ws)
 
-    def _batch3(self, name: str, A: Any, Bv: Any, Cv: Any, names: tuple[str, str, str]) -> np.ndarray:
+    def _batch3(self, name: str, A: Any, Bv: Any, Cv: Any, names: tuple[str, str, str],
+                p: DynamicsParameters | None) -> np.ndarray:
+        params = self.parameters if p is None else self.check_parameters(p)
         n = self.n
         arrays = [_batch(v, n, k) for v, k in zip((A, Bv, Cv), names)]
         N = arrays[0].shape[0]
@@ -315,12 +281,12 @@ class Dynamics:
                 raise ValueError(f"{k}: expected {N} rows like {names[0]}, got shape {arr.shape}")
         if N == 0:
             return np.empty((0, n))
-        return self._eval(name, [*arrays, self._p], N)
+        return self._eval(name, [*arrays, params.vector], N)
 
-    def rne_batch(self, Q: Any, QD: Any, QDD: Any) -> np.ndarray:
+    def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: DynamicsParameters | None = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch3("rne", Q, QD, QDD, ("Q", "QD", "QDD"))
+        return self._batch3("rne", Q, QD, QDD, ("Q", "QD", "QDD"), p)
 
-    def accel_batch(self, Q: Any, QD: Any, TAU: Any) -> np.ndarray:
+    def accel_batch(self, Q: Any, QD: Any, TAU: Any, p: DynamicsParameters | None = None) -> np.ndarray:
         """(N, n) forward dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch3("accel", Q, QD, TAU, ("Q", "QD", "TAU"))
+        return self._batch3("accel", Q, QD, TAU, ("Q", "QD", "TAU"), p)

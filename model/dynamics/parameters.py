@@ -17,14 +17,22 @@ names::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, Sequence
 
 import casadi as ca
 import numpy as np
 
+from ..arrays import finite_vector
 from ..description import RobotDescription
 
-__all__ = ["ParameterLayout", "SymbolicParameters", "parameter_layout", "split_parameters", "inertia_matrix_sx"]
+__all__ = [
+    "DynamicsParameters",
+    "ParameterLayout",
+    "SymbolicParameters",
+    "parameter_layout",
+    "split_parameters",
+    "inertia_matrix_sx",
+]
 
 
 class SymbolicParameters(NamedTuple):
@@ -114,6 +122,150 @@ def parameter_layout(desc: RobotDescription) -> ParameterLayout:
         n=n, names=tuple(names), descriptions=tuple(descriptions), units=tuple(units),
         defaults=np.array(defaults), slices=slices,
     )
+
+
+def _payload(mass: Any, com: Any, inertia: Any) -> tuple[float, np.ndarray, np.ndarray]:
+    """The payload fields checked: mass >= 0 kg, (3,) centre of mass, (6,) positive semi-definite inertia."""
+    m = float(mass)
+    if not np.isfinite(m) or m < 0:
+        raise ValueError(f"mass: expected a finite number >= 0 kg, got {m!r}")
+    c = finite_vector(com, 3, "com")
+    six = finite_vector(inertia, 6, "inertia")
+    ixx, iyy, izz, ixy, iyz, ixz = six
+    eig = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
+    if eig[0] < -1e-12 * max(1.0, abs(eig).max()):
+        raise ValueError(f"inertia: expected a positive semi-definite inertia, got {six.tolist()} "
+                         f"(eigenvalues {eig.tolist()})")
+    return m, c, six
+
+
+#: The friction fields: argument name, field, sign the values must have, the rule in words.
+_FRICTION = (
+    ("viscous", "viscous_friction", 1.0, ">= 0"),
+    ("coulomb_pos", "coulomb_friction_pos", 1.0, ">= 0"),
+    ("coulomb_neg", "coulomb_friction_neg", -1.0, "<= 0"),
+)
+
+
+def _friction(n: int, name: str, value: Any, sign: float, expect: str) -> np.ndarray:
+    v = finite_vector(value, n, name)
+    if np.any(sign * v < 0):
+        raise ValueError(f"{name}: expected values {expect}, got {v.tolist()}")
+    return v
+
+
+@dataclass(frozen=True, eq=False)
+class DynamicsParameters:
+    """An immutable value of the parameter vector ``p`` of one robot (layout :class:`ParameterLayout`).
+
+    Every numeric dynamics method takes one (``p=``); changing a payload, friction or
+    gravity makes a new value (:meth:`with_payload`, :meth:`with_friction`,
+    :meth:`with_gravity`) and leaves this one and every model untouched.
+
+    Parameters
+    ----------
+    layout
+        The robot's parameter layout.
+    vector
+        (np,) values in layout order; checked field by field (payload mass >= 0 kg, a
+        positive semi-definite payload inertia, viscous and Tc+ friction >= 0, Tc- <= 0,
+        everything finite), a ValueError ``"p: <field>: ..."`` otherwise. Stored as a
+        read-only copy.
+    """
+
+    layout: ParameterLayout
+    vector: np.ndarray
+
+    def __post_init__(self) -> None:
+        lay = self.layout
+        p = np.array(finite_vector(self.vector, lay.size, "p"), dtype=np.float64)
+        sl = lay.slices
+        try:
+            _payload(p[sl["payload_mass"]][0], p[sl["payload_com"]], p[sl["payload_inertia"]])
+            for name, field, sign, expect in _FRICTION:
+                _friction(lay.n, name, p[sl[field]], sign, expect)
+        except ValueError as exc:
+            raise ValueError(f"p: {exc}") from None
+        p.flags.writeable = False
+        object.__setattr__(self, "vector", p)
+
+    @classmethod
+    def defaults(cls, layout: ParameterLayout) -> "DynamicsParameters":
+        """The description's values: no payload, its friction and gravity."""
+        return cls(layout, layout.defaults)
+
+    def __repr__(self) -> str:
+        return f"DynamicsParameters({dict(zip(self.layout.names, self.vector.tolist()))!r})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, DynamicsParameters):
+            return NotImplemented
+        return self.layout.names == other.layout.names and bool(np.array_equal(self.vector, other.vector))
+
+    __hash__ = None  # type: ignore[assignment]  # equal values, not identity; the vector is an array
+
+    def field(self, name: str) -> np.ndarray:
+        """A copy of one field (``payload_mass``, ``payload_com``, ``viscous_friction``, ..., ``gravity``)."""
+        if name not in self.layout.slices:
+            raise ValueError(f"field: expected one of {', '.join(self.layout.slices)}, got {name!r}")
+        return self.vector[self.layout.slices[name]].copy()
+
+    @property
+    def payload_mass(self) -> float:
+        """Payload mass, kg."""
+        return float(self.vector[self.layout.slices["payload_mass"]][0])
+
+    @property
+    def viscous_friction(self) -> np.ndarray:
+        """(n,) motor-side viscous friction, N m s/rad."""
+        return self.field("viscous_friction")
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """(3,) gravitational acceleration in the base frame, m/s^2."""
+        return self.field("gravity")
+
+    def as_dict(self) -> dict[str, float]:
+        """``{name: value}`` in layout order (the FMU parameter names)."""
+        return dict(zip(self.layout.names, (float(v) for v in self.vector)))
+
+    def _replace(self, values: dict[str, Any]) -> "DynamicsParameters":
+        p = self.vector.copy()
+        for field, value in values.items():
+            p[self.layout.slices[field]] = value
+        return DynamicsParameters(self.layout, p)
+
+    def with_payload(self, mass: float, com: Sequence[float] = (0.0, 0.0, 0.0),
+                     inertia: Sequence[float] = (0.0,) * 6) -> "DynamicsParameters":
+        """A rigid payload fixed to frame n (replacing any other).
+
+        Parameters
+        ----------
+        mass
+            kg, >= 0 (0 removes the payload).
+        com
+            (3,) centre of mass in frame n, m.
+        inertia
+            (6,) ``[Ixx Iyy Izz Ixy Iyz Ixz]`` about the payload COM, frame-n axes, kg m^2 (zeros: point mass).
+        """
+        m, c, six = _payload(mass, com, inertia)
+        return self._replace({"payload_mass": m, "payload_com": c, "payload_inertia": six})
+
+    def with_friction(self, viscous: Any = None, coulomb_pos: Any = None,
+                      coulomb_neg: Any = None) -> "DynamicsParameters":
+        """Motor-side friction per joint: viscous (N m s/rad, >= 0), Coulomb Tc+ (>= 0) and Tc- (<= 0), N m.
+
+        Arguments left as None keep this value's.
+        """
+        values = {}
+        for (name, field, sign, expect), value in zip(_FRICTION, (viscous, coulomb_pos, coulomb_neg)):
+            if value is not None:
+                values[field] = _friction(self.layout.n, name, value, sign, expect)
+        return self._replace(values)
+
+    def with_gravity(self, gravity: Any) -> "DynamicsParameters":
+        """Gravitational acceleration in the base frame, (3,) m/s^2."""
+        return self._replace({"gravity": finite_vector(gravity, 3, "gravity")})
 
 
 def split_parameters(layout: ParameterLayout, p: Any) -> SymbolicParameters:

@@ -1,11 +1,13 @@
-"""Controller FMUs: the control laws of :mod:`control_design.controllers` as stateless FMI 2.0 FMUs.
+"""Controller FMUs: the control laws of :mod:`control_design.laws` as stateless FMI 2.0 FMUs.
 
 A controller FMU is built by the same variable table (:mod:`fmu.variables`) and
 C wrapper (``fmu/c/``) as the plant: a :class:`~fmu.variables.ModelSpec` with no
-states (``nx = 0``) whose output function is the control law,
-``tau_m = out(x, u, p)``, so its outputs depend directly on its inputs
-(direct feedthrough). Inputs are the reference and the measured state,
-parameters the gains and limits (all tunable):
+states (``nx = 0``) whose output function is the controller's own CasADi
+Function (:func:`control_design.laws.controller_function`: the law, then the
+saturation), ``tau_m = out(x, u, p)``, so its outputs depend directly on its
+inputs (direct feedthrough) and it computes what the Python controller computes.
+Inputs are the reference and the measured state, parameters the law's (all
+tunable):
 
 ================  ==========================================================
 inputs            ``q_ref[i]``, ``qd_ref[i]`` (``qdd_ref[i]`` for 'pd-ff' and
@@ -15,19 +17,15 @@ output            ``tau_m[i]``, motor torque, N m
 'pd-ff'           ``gear_ratio[i]``; ``tau_m_max[i]`` (N m); 'pd-ff':
                   ``J_ff_m[i]`` (kg m^2), ``B_ff_m[i]`` (N m s/rad);
                   'pd-g': the controller model's ``model.*`` parameters
-'ct'              ``Kp[i]`` (1/s^2), ``Kd[i]`` (1/s), ``tau_m_max[i]`` (N m) and
-                  the controller model's ``model.*`` parameters (payload,
-                  friction, gravity); the model itself (Newton-Euler ``rne``)
-                  is generated into the FMU's C
+'ct'              ``Kp[i]`` (1/s^2), ``Kd[i]`` (1/s), ``gear_ratio[i]``,
+                  ``tau_m_max[i]`` (N m) and the controller model's ``model.*``
+                  parameters (payload, friction, gravity); the model itself
+                  (Newton-Euler ``rne``) is generated into the FMU's C
 ================  ==========================================================
 
-Each law is written with the same operations, in the same order, as the
-Python controller it mirrors (``DecentralisedController.update`` and
-``ComputedTorqueController.update``), and saturates the same way
-(``min(max(tau_m, -tau_m_max), tau_m_max)``), so the FMU reproduces the Python
-controller to round-off. A controller without saturation gets the largest
-double as its limit (a no-op on finite torques). The PID kind has an
-integrator state and is not exported.
+A controller without saturation gets :data:`~control_design.laws.NO_LIMIT` as
+its limit (a no-op on finite torques). The PID law has an integrator state;
+the FMU wrapper has continuous states only, so it is not exported.
 """
 
 from __future__ import annotations
@@ -39,18 +37,18 @@ import zipfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 import casadi as ca
 import numpy as np
 
-from control_design.controllers import ComputedTorqueController, Controller, DecentralisedController
+from control_design.controllers import ComputedTorqueController, Controller, LawController
 from control_design.design import RobotDesign
+from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
+from fmu.build import build_fmu
+from fmu.variables import ModelSpec, Quantity
 from model.robot import Robot
-
-from .build import build_fmu
-from .variables import ModelSpec, Quantity
 
 __all__ = [
     "CONTROLLER_FMU_KINDS",
@@ -64,10 +62,21 @@ __all__ = [
 
 #: Controller kinds a controller FMU can carry.
 CONTROLLER_FMU_KINDS: tuple[str, ...] = ("pd", "pd-g", "pd-ff", "ct")
-#: Torque limit (N m) written for a controller without saturation: clipping at it changes no finite torque.
-NO_LIMIT = float(np.finfo(float).max)
 
 _NAME_PATTERN = re.compile(r"^(?P<robot>.+) (?P<kind>pd|pd-g|pd-ff|ct) controller$")
+
+#: The law in words, for the FMU description.
+_LAW_TEXT = {
+    "pd": "decentralised PD on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd)",
+    "pd-ff": "decentralised PD on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd)"
+             " + J_ff_m G qdd_ref + B_ff_m G qd_ref",
+    "pd-g": "decentralised PD on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd) + g(q) / G",
+    "ct": "computed torque tau_m = rne(q, qd, qdd_ref + Kd (qd_ref - qd) + Kp (q_ref - q)) / G",
+}
+#: FMU parameter order (the law's inputs are matched by name).
+_PARAMETER_ORDER = ("Kp", "Kd", "Ki", "gear_ratio", "tau_m_max", "J_ff_m", "B_ff_m", "p_model")
+#: FMU input name of each law signal.
+_SIGNAL_NAMES = {"q_d": "q_ref", "qd_d": "qd_ref", "qdd_d": "qdd_ref", "q": "q", "qd": "qd"}
 
 Progress = Callable[[str], None]
 
@@ -89,22 +98,43 @@ def _model_params(robot: Robot, uses: str) -> tuple[list[Quantity], np.ndarray, 
     tunable = [not nm.startswith("gravity") for nm in layout.names]
     lo: list[float | None] = [0.0 if nm.split("[")[0] in nonneg else None for nm in layout.names]
     hi: list[float | None] = [0.0 if nm.split("[")[0] == "coulomb_friction_neg" else None for nm in layout.names]
-    return quantities, robot.dynamics.p, tunable, lo, hi
+    return quantities, robot.parameters.vector.copy(), tunable, lo, hi
+
+
+def _vector_parameter(name: str, kind: str, robot: Robot) -> tuple[list[str], str, float | None]:
+    """Per-joint units, description and lower bound of the law parameter ``name``."""
+    n = robot.n
+    if name == "Kp":
+        return (["1/s2"] * n, "outer-loop proportional gain (wn^2)", None) if kind == "ct" else \
+            (["N.m/rad"] * n, "motor-side proportional gain", None)
+    if name == "Kd":
+        return (["1/s"] * n, "outer-loop derivative gain (2 zeta wn)", None) if kind == "ct" else \
+            (["N.m.s/rad"] * n, "motor-side derivative gain", None)
+    if name == "gear_ratio":
+        return (["" if lk.is_revolute else "rad/m" for lk in robot.description.links],
+                "reduction ratio G (motor angle = G q)", None)
+    if name == "tau_m_max":
+        return ["N.m"] * n, "motor torque limit", 0.0
+    if name == "J_ff_m":
+        return ["kg.m2"] * n, "fed-forward decoupled inertia, motor side", 0.0
+    if name == "B_ff_m":
+        return ["N.m.s/rad"] * n, "fed-forward viscous friction, motor side", 0.0
+    raise ValueError(f"controller: the law parameter {name!r} has no FMU variable")
 
 
 def controller_spec(controller: Controller, robot: Robot, *, model_identifier: str | None = None) -> ModelSpec:
-    """The :class:`~fmu.variables.ModelSpec` of a stateless controller FMU reproducing ``controller``.
+    """The :class:`~fmu.variables.ModelSpec` of a stateless controller FMU running ``controller``'s law.
 
     Parameters
     ----------
     controller
         A :class:`~control_design.controllers.DecentralisedController` of kind 'pd', 'pd-g' or
-        'pd-ff', or a :class:`~control_design.controllers.ComputedTorqueController`; its gains,
-        gear ratios, limits and model parameters become the FMU's parameter start values, its
-        rate (Hz) the FMU's default communication step ``1 / rate_hz`` (s).
+        'pd-ff', or a :class:`~control_design.controllers.ComputedTorqueController`; its Function
+        (law and saturation) is the FMU's output function, its parameter values (gains, gear
+        ratios, limits, model parameters) the FMU's parameter start values, its rate (Hz) the
+        FMU's default communication step ``1 / rate_hz`` (s).
     robot
-        The robot the controller drives (joint names, units; the model of 'pd-g' and 'ct' is the
-        controller's own).
+        The robot the controller drives (joint names, units).
     model_identifier
         C identifier of the FMU (default ``<robot>_<kind>_controller``).
 
@@ -117,90 +147,61 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
     kind = controller.kind
     if kind not in CONTROLLER_FMU_KINDS:
         raise ValueError(f"controller: expected a kind in {CONTROLLER_FMU_KINDS} (stateless laws), got {kind!r}")
+    if not isinstance(controller, LawController):
+        raise ValueError(f"controller: expected a DecentralisedController or ComputedTorqueController, "
+                         f"got {type(controller).__name__}")
     n = robot.n
     if controller.n != n:
         raise ValueError(f"controller: expected {n} joints like robot {robot.name!r}, got {controller.n}")
     pos, vel, acc = _units(robot)
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
     idx = range(n)
+    function = controller.function
+    law = controller.law
+    args: dict[str, ca.SX] = {}
 
-    qr, qdr, qddr = ca.SX.sym("q_ref", n), ca.SX.sym("qd_ref", n), ca.SX.sym("qdd_ref", n)
-    q, qd = ca.SX.sym("q", n), ca.SX.sym("qd", n)
-    uses_qdd = kind in ("pd-ff", "ct")
-    u_parts = [qr, qdr] + ([qddr] if uses_qdd else []) + [q, qd]
-    inputs = ([Quantity(f"q_ref[{i + 1}]", pos[i], f"reference position of joint {i + 1} ({names[i]})") for i in idx]
-              + [Quantity(f"qd_ref[{i + 1}]", vel[i], f"reference velocity of joint {i + 1} ({names[i]})") for i in idx]
-              + ([Quantity(f"qdd_ref[{i + 1}]", acc[i], f"reference acceleration of joint {i + 1} ({names[i]})")
-                  for i in idx] if uses_qdd else [])
-              + [Quantity(f"q[{i + 1}]", pos[i], f"measured position of joint {i + 1} ({names[i]})") for i in idx]
-              + [Quantity(f"qd[{i + 1}]", vel[i], f"measured velocity of joint {i + 1} ({names[i]})") for i in idx])
+    inputs: list[Quantity] = []
+    u_parts: list[ca.SX] = []
+    what = {"q_ref": ("reference position", pos), "qd_ref": ("reference velocity", vel),
+            "qdd_ref": ("reference acceleration", acc), "q": ("measured position", pos),
+            "qd": ("measured velocity", vel)}
+    for fmu_name in ("q_ref", "qd_ref", "qdd_ref", "q", "qd"):
+        signal = next((s for s in law.signals if _SIGNAL_NAMES[s] == fmu_name), None)
+        if signal is None:
+            continue
+        text, units = what[fmu_name]
+        inputs += [Quantity(f"{fmu_name}[{i + 1}]", units[i], f"{text} of joint {i + 1} ({names[i]})") for i in idx]
+        args[signal] = ca.SX.sym(fmu_name, n)
+        u_parts.append(args[signal])
 
-    limit = np.full(n, NO_LIMIT) if controller.tau_m_max is None else np.asarray(controller.tau_m_max, dtype=float)
+    values = controller.parameter_values()
     params: list[Quantity] = []
     p_start: list[np.ndarray] = []
     p_tunable: list[bool] = []
     p_min: list[float | None] = []
     p_max: list[float | None] = []
     p_parts: list[ca.SX] = []
-
-    def add(symbol: str, values: np.ndarray, unit: Any, text: str, lo: float | None = None) -> ca.SX:
-        units = unit if isinstance(unit, list) else [unit] * n
-        sym = ca.SX.sym(symbol, n)
-        params.extend(Quantity(f"{symbol}[{i + 1}]", units[i], f"{text}, joint {i + 1} ({names[i]})") for i in idx)
-        p_start.append(np.asarray(values, dtype=float))
-        p_tunable.extend([True] * n)
-        p_min.extend([lo] * n)
-        p_max.extend([None] * n)
-        p_parts.append(sym)
-        return sym
-
-    def add_model(model: Robot, uses: str) -> ca.SX:
-        """The controller model's parameters ``model.*`` (see :func:`_model_params`), appended as one symbol."""
-        pq, ps, pt, plo, phi = _model_params(model, uses)
-        pm = ca.SX.sym("model_p", len(pq))
-        params.extend(pq)
-        p_start.append(ps)
-        p_tunable.extend(pt)
-        p_min.extend(plo)
-        p_max.extend(phi)
-        p_parts.append(pm)
-        return pm
-
-    if isinstance(controller, ComputedTorqueController):
-        model = controller.model
-        Kp = add("Kp", controller.Kp, "1/s2", "outer-loop proportional gain (wn^2)")
-        Kd = add("Kd", controller.Kd, "1/s", "outer-loop derivative gain (2 zeta wn)")
-        tmax = add("tau_m_max", limit, "N.m", "motor torque limit", lo=0.0)
-        pm = add_model(model, "inverse dynamics")
-        # ComputedTorqueController.update: v = qdd_d + Kd (qd_d - qd) + Kp (q_d - q); tau_m = rne(q, qd, v) / G
-        v = qddr + Kd * (qdr - qd) + Kp * (qr - q)
-        tau_m = model.dynamics.functions.rne(q, qd, v, pm) / ca.DM(controller.G)
-        law = "computed torque tau_m = rne(q, qd, qdd_ref + Kd (qd_ref - qd) + Kp (q_ref - q)) / G"
-    elif isinstance(controller, DecentralisedController):
-        Kp = add("Kp", controller.Kp, "N.m/rad", "motor-side proportional gain")
-        Kd = add("Kd", controller.Kd, "N.m.s/rad", "motor-side derivative gain")
-        G = add("gear_ratio", controller.G, ["" if lk.is_revolute else "rad/m" for lk in robot.description.links],
-                "reduction ratio G (motor angle = G q)")
-        tmax = add("tau_m_max", limit, "N.m", "motor torque limit", lo=0.0)
-        # DecentralisedController.update: e_m = G (q_d - q), e_m' = G (qd_d - qd), tau_m = Kp e_m + Kd e_m'
-        tau_m = Kp * (G * (qr - q)) + Kd * (G * (qdr - qd))
-        law = "decentralised PD on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd)"
-        if kind == "pd-ff":
-            J = add("J_ff_m", controller.J_ff_m, "kg.m2", "fed-forward decoupled inertia, motor side", lo=0.0)
-            B = add("B_ff_m", controller.B_ff_m, "N.m.s/rad", "fed-forward viscous friction, motor side", lo=0.0)
-            tau_m = tau_m + J * G * qddr + B * G * qdr
-            law += " + J_ff_m G qdd_ref + B_ff_m G qd_ref"
-        elif kind == "pd-g":
-            gmodel = controller.gravity_model
-            if gmodel is None:
-                raise ValueError("controller: a 'pd-g' controller needs its gravity_model")
-            pm = add_model(gmodel, "gravity compensation")
-            tau_m = tau_m + gmodel.dynamics.functions.gravload(q, pm) / G
-            law += " + g(q) / G"
-    else:
-        raise ValueError(f"controller: expected a DecentralisedController or ComputedTorqueController, "
-                         f"got {type(controller).__name__}")
-    y = ca.fmin(ca.fmax(tau_m, -tmax), tmax)  # np.clip(tau_m, -tau_m_max, tau_m_max)
+    for name in sorted(values, key=_PARAMETER_ORDER.index):
+        if name == "p_model":
+            model = controller.model if isinstance(controller, ComputedTorqueController) else \
+                controller.gravity_model  # type: ignore[attr-defined]
+            uses = "inverse dynamics" if kind == "ct" else "gravity compensation"
+            pq, ps, pt, plo, phi = _model_params(model, uses)
+            params += pq
+            p_start.append(ps)
+            p_tunable += pt
+            p_min += plo
+            p_max += phi
+        else:
+            units, text, lo = _vector_parameter(name, kind, robot)
+            params += [Quantity(f"{name}[{i + 1}]", units[i], f"{text}, joint {i + 1} ({names[i]})") for i in idx]
+            p_start.append(values[name])
+            p_tunable += [True] * n
+            p_min += [lo] * n
+            p_max += [None] * n
+        args[name] = ca.SX.sym(name, values[name].size)
+        p_parts.append(args[name])
+    y = function(*[args[function.name_in(i)] for i in range(function.n_in())])
 
     x = ca.SX.sym("x", 0)
     u = ca.vertcat(*u_parts)
@@ -216,7 +217,7 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
         model_identifier=ident,
         model_name=f"{robot.name} {kind} controller",
         description=(f"{kind} controller of {robot.name} sampled at {controller.rate_hz:g} Hz (stateless, direct "
-                     f"feedthrough): {law}, saturated at +-tau_m_max"),
+                     f"feedthrough): {_LAW_TEXT[kind]}, saturated at +-tau_m_max"),
         ode=ode, out=out,
         states=(), x_start=np.zeros(0),
         inputs=tuple(inputs),
@@ -350,7 +351,7 @@ def validate_controller_fmu(path: str | os.PathLike[str], controller: Controller
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
-    from .validate import binary_problems, model_description_problems
+    from fmu.validate import binary_problems, model_description_problems
 
     path = str(path)
     described = tuple(model_description_problems(path))

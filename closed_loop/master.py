@@ -1,7 +1,7 @@
 """Closed-loop co-simulation masters: a controller driving the plant FMU at the control rate.
 
-The timing convention is the one of :func:`control_design.simulate.simulate_tracking`,
-so the results compare sample by sample: at ``t_k = t0 + k h`` (integer k, never a
+The timing is the one :class:`~closed_loop.schedule.Schedule` of every loop, that of
+:func:`closed_loop.simulate.simulate_tracking`, so the results compare sample by sample: at ``t_k = t0 + k h`` (integer k, never a
 running sum; ``h = 1 / rate_hz``) the controller reads the plant state and the
 reference ``trajectory.path`` at ``t_k``; its motor torques are held over
 ``[t_k, t_k+1]`` (zero-order hold) while the plant FMU takes one
@@ -12,7 +12,7 @@ as the Python loop's).
 * :func:`run_closed_loop` - FMPy's low-level ``FMU2Slave`` (Gauss-Seidel order:
   plant outputs -> controller -> plant inputs within the same instant). The
   controller is a Python :class:`~control_design.controllers.Controller` or a
-  controller FMU (:mod:`fmu.controller_fmu`), whose torques go to the plant
+  controller FMU (:mod:`closed_loop.controller_fmu`), whose torques go to the plant
   without leaving C buffers.
 * :func:`run_libcosim_closed_loop` - the same two FMUs in libcosim, connected by
   libcosim variable connections (plant ``q``, ``qd`` -> controller; controller
@@ -20,7 +20,7 @@ as the Python loop's).
   parallel and transfers the connected values after the step (Jacobi), so a
   direct-feedthrough controller reaches the plant one period later: that loop is
   the Python loop with a one-period computational delay
-  (:class:`OnePeriodDelay`), which is what it is compared with. The reference is
+  (:class:`~closed_loop.delay.OnePeriodDelay`), which is what it is compared with. The reference is
   fed by Python through libcosim's override manipulator from the same
   ``trajectory.path`` samples as the Python loop (bit-identical references; the
   controller FMU stays a time-free law usable with any trajectory or waypoint file).
@@ -42,13 +42,19 @@ import numpy as np
 from control_design.controllers import Controller
 from control_design.design import RobotDesign
 from control_design.errors import SimulationDivergedError
+from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
-from control_design.simulate import TrackingResult, default_substeps
-from model.robot import Robot, as_joint_vector
+from fmu.build import build_fmu, export_fmu
+from fmu.cosim import CosimError, add_slave, last_error
+from fmu.validate import RobotNotReloadableError, reload_fmu_robot
+from model.robot import Robot
 from model.trajectory import Trajectory
 
+from .controller_fmu import controller_fmu_kind, controller_spec
+from .result import TrackingResult
+from .schedule import Schedule
+
 __all__ = [
-    "OnePeriodDelay",
     "run_closed_loop",
     "run_libcosim_closed_loop",
     "closed_loop_through_fmu",
@@ -60,43 +66,11 @@ Say = Callable[[str], None]
 _NS_PER_S = 1_000_000_000
 
 
-class OnePeriodDelay(Controller):
-    """A controller whose torques reach the plant one control period late.
-
-    ``update`` at ``t_k`` computes the inner controller's torques and returns those
-    computed at ``t_k-1`` (at ``t_0`` its own, which are therefore held for two
-    periods): the loop a Jacobi co-simulation master such as libcosim's runs.
-
-    Parameters
-    ----------
-    inner
-        The delayed controller (its rate, gear ratios and limits are this one's).
-    """
-
-    def __init__(self, inner: Controller) -> None:
-        super().__init__(inner.n, inner.rate_hz, inner.G, inner.tau_m_max)
-        self.inner = inner
-        self.kind = inner.kind
-        self._held: np.ndarray | None = None
-
-    def reset(self) -> None:
-        self.inner.reset()
-        self._held = None
-
-    def update(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
-        new = self.inner.update(t, q, qd, ref)
-        out = new if self._held is None else self._held
-        self._held = new
-        return out
-
-
 # --------------------------------------------------------------------- helpers
 
 def _plant_robot(plant_fmu: Path, plant: Robot | None) -> Robot:
     if plant is not None:
         return plant
-    from .validate import RobotNotReloadableError, reload_fmu_robot
-
     try:
         robot = reload_fmu_robot(plant_fmu)
     except RobotNotReloadableError as exc:
@@ -113,48 +87,7 @@ def _existing(path: str | os.PathLike[str], what: str) -> Path:
     return p
 
 
-class _Schedule:
-    """Control instants, references and initial state, as :func:`simulate_tracking` builds them."""
-
-    def __init__(self, plant: Robot, trajectory: Trajectory, dt: float, t_final: float | None, q0: Any, qd0: Any,
-                 substeps: int | None) -> None:
-        n = plant.n
-        if trajectory.n != n:
-            raise ValueError(f"trajectory: expected {n} joints like plant {plant.name!r}, got {trajectory.n}")
-        path = trajectory.path
-        t0 = path.t_start
-        t_end = path.t_end if t_final is None else float(t_final)
-        steps = int(round((t_end - t0) / dt))
-        if steps < 1:
-            raise ValueError(f"t_final: expected at least one control period ({dt:g} s) after t0 = {t0:g} s, "
-                             f"got {t_end!r}")
-        self.dt = dt
-        self.steps = steps
-        self.t = t0 + np.arange(steps + 1) * dt
-        Qr, QDr, QDDr = path.batch(self.t)
-        self.Qr, self.QDr, self.QDDr = np.asarray(Qr), np.asarray(QDr), np.asarray(QDDr)
-        self.q0 = np.array(self.Qr[0]) if q0 is None else as_joint_vector(q0, n, "q0")
-        self.qd0 = np.array(self.QDr[0]) if qd0 is None else as_joint_vector(qd0, n, "qd0")
-        self.substeps = default_substeps(plant, dt, self.q0) if substeps is None else int(substeps)
-        if self.substeps < 1:
-            raise ValueError(f"substeps: expected >= 1, got {substeps!r}")
-
-    def result(self, plant: Robot, kind: str, Q: np.ndarray, QD: np.ndarray, TAU: np.ndarray,
-               tau_m_max: np.ndarray | None, wall: float) -> TrackingResult:
-        links = plant.description.links
-        return TrackingResult(
-            controller=kind, robot=plant.name,
-            joints=tuple(lk.name or f"joint{i + 1}" for i, lk in enumerate(links)),
-            units=tuple("rad" if lk.is_revolute else "m" for lk in links),
-            t=self.t, q=Q, qd=QD, q_ref=self.Qr.copy(), qd_ref=self.QDr.copy(), qdd_ref=self.QDDr.copy(), tau_m=TAU,
-            G=np.array(plant.gear_ratio), tau_m_max=None if tau_m_max is None else np.array(tau_m_max, dtype=float),
-            rate_hz=1.0 / self.dt, substeps=self.substeps, wall_time=wall,
-        )
-
-
 def _limits(values: np.ndarray) -> np.ndarray | None:
-    from .controller_fmu import NO_LIMIT
-
     return None if np.all(values >= NO_LIMIT) else values
 
 
@@ -215,11 +148,11 @@ class _Instance:
             self.slave.freeInstance()
 
 
-def _plant_start_values(plant: Robot, sched: _Schedule) -> dict[str, float]:
+def _plant_start_values(plant: Robot, sched: Schedule) -> dict[str, float]:
     n = plant.n
     values = {f"q[{i + 1}]": float(sched.q0[i]) for i in range(n)}
     values.update({f"qd[{i + 1}]": float(sched.qd0[i]) for i in range(n)})
-    values.update(dict(zip(plant.dynamics.layout.names, (float(v) for v in plant.dynamics.p))))
+    values.update(plant.parameters.as_dict())
     values["internal_step"] = sched.dt / sched.substeps
     return values
 
@@ -239,7 +172,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
         The plant FMU (:func:`fmu.export_fmu`).
     controller
         A Python :class:`~control_design.controllers.Controller` (its ``update`` is called once
-        per period) or the path of a controller FMU (:func:`fmu.export_controller_fmu`).
+        per period) or the path of a controller FMU (:func:`closed_loop.export_controller_fmu`).
     trajectory
         Reference; its path is evaluated at every control instant.
     plant
@@ -254,7 +187,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
         Initial state (default: the reference at the start).
     substeps
         RK4 sub-steps of the plant FMU per period (default
-        :func:`~control_design.simulate.default_substeps`, as the Python loop).
+        :func:`~closed_loop.schedule.default_substeps`, as the Python loop).
     controller_parameters
         Parameter values set in a controller FMU before it starts (e.g. ``{"Kp[1]": 100.0}``).
     progress
@@ -263,7 +196,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
     Returns
     -------
     TrackingResult
-        Same fields and meaning as :func:`~control_design.simulate.simulate_tracking`'s; ``wall_time``
+        Same fields and meaning as :func:`~closed_loop.simulate.simulate_tracking`'s; ``wall_time``
         is the time of the loop (s).
 
     Raises
@@ -290,12 +223,10 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
             raise ValueError(f"rate_hz: the Python controller runs at {py_ctrl.rate_hz:g} Hz, got {rate_hz!r}")
         kind = py_ctrl.kind
     else:
-        from .controller_fmu import controller_fmu_kind
-
         ctrl_path = _existing(controller, "controller")
         kind = controller_fmu_kind(ctrl_path)[1]
         dt = 0.0
-    sched: _Schedule | None = None
+    sched: Schedule | None = None
 
     with tempfile.TemporaryDirectory(prefix="mw_master_") as work:
         plant_inst: _Instance | None = None
@@ -308,7 +239,9 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                 dt = 1.0 / rate_hz if rate_hz is not None else float(step) if step else 0.0
                 if not dt > 0:
                     raise ValueError("rate_hz: expected a control rate (the controller FMU has no default step)")
-            sched = _Schedule(plant_robot, trajectory, dt, t_final, q0, qd0, substeps)
+            rate = rate_hz if rate_hz is not None else py_ctrl.rate_hz if py_ctrl is not None else None
+            sched = Schedule.build(plant_robot, trajectory, dt, rate_hz=rate, t_final=t_final, q0=q0, qd0=qd0,
+                                   substeps=substeps)
             x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]
             tau_names = [f"tau_m[{i + 1}]" for i in range(n)]
             x_vr, tau_vr = plant_inst.refs(x_names), plant_inst.refs(tau_names)
@@ -325,7 +258,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                 y_vr = ctrl_inst.refs(tau_names)
                 ctrl_inst.start(float(sched.t[0]), dict(controller_parameters or {}))
                 tau_m_max = _limits(ctrl_inst.get([f"tau_m_max[{i + 1}]" for i in range(n)]))
-                columns = {"q_ref": sched.Qr, "qd_ref": sched.QDr, "qdd_ref": sched.QDDr}
+                columns = {"q_ref": sched.q_ref, "qd_ref": sched.qd_ref, "qdd_ref": sched.qdd_ref}
                 R = np.ascontiguousarray(np.hstack([columns[g] for g in groups]))
                 m = R.shape[1]
                 u_buf = (fmi2Real * (m + 2 * n))()
@@ -377,7 +310,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
             else:
                 assert py_ctrl is not None
                 py_ctrl.reset()
-                Qr, QDr, QDDr = sched.Qr, sched.QDr, sched.QDDr
+                Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
                 for k in range(steps + 1):
                     p_get(p_comp, x_vr, n2, x_buf)
                     q, qd = x_np[:n].copy(), x_np[n:].copy()
@@ -413,7 +346,7 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
     from their values at ``t_0`` (libcosim initial values). libcosim's fixed-step
     algorithm is Jacobi: the torques computed at ``t_k`` drive the plant over
     ``[t_k+1, t_k+2]``, so the run equals the Python loop with
-    :class:`OnePeriodDelay` around the controller.
+    :class:`~closed_loop.delay.OnePeriodDelay` around the controller.
 
     Parameters are those of :func:`run_closed_loop`; ``quiet`` sets libcosim's
     (process-wide) log level to warnings. The result's ``tau_m[k]`` is the torque the
@@ -431,8 +364,6 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
     from libcosimpy.CosimManipulator import CosimManipulator
     from libcosimpy.CosimObserver import CosimObserver
 
-    from .controller_fmu import controller_fmu_kind
-    from .cosim import CosimError, _add_slave, _last_error
 
     plant_path = _existing(plant_fmu, "plant_fmu").resolve()
     ctrl_path = _existing(controller_fmu, "controller_fmu").resolve()
@@ -451,7 +382,8 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
     step_ns = int(round(dt * _NS_PER_S))
     if step_ns < 1 or abs(step_ns - dt * _NS_PER_S) > 1e-6 * max(1.0, dt * _NS_PER_S):
         raise ValueError(f"rate_hz: libcosim counts time in ns; the period {dt!r} s is not a whole number of ns")
-    sched = _Schedule(plant_robot, trajectory, dt, t_final, q0, qd0, substeps)
+    sched = Schedule.build(plant_robot, trajectory, dt, rate_hz=rate_hz, t_final=t_final, q0=q0, qd0=qd0,
+                           substeps=substeps)
     if quiet:
         log_output_level(CosimLogLevel.WARNING)
 
@@ -461,7 +393,7 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
         index: dict[str, int] = {}
         refs: dict[str, dict[str, int]] = {}
         for name, path in (("plant", plant_path), ("controller", ctrl_path)):
-            slave, i = _add_slave(execution, path, name)
+            slave, i = add_slave(execution, path, name)
             held.append(slave)
             index[name] = i
             refs[name] = {v.name.decode(): int(v.reference) for v in execution.slave_variables(i)}
@@ -488,8 +420,8 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
                         [(("controller", a), ("plant", b)) for a, b in zip(ctrl_tau, plant_tau)]:
             if execution.connect_real_variables(index[src[0]], src[1], index[dst[0]], dst[1]) != 0:
                 raise CosimError(f"libcosim refused the connection {src[0]}:{src[1]} -> {dst[0]}:{dst[1]}: "
-                                 f"{_last_error()}")
-        columns = {"q_ref": sched.Qr, "qd_ref": sched.QDr, "qdd_ref": sched.QDDr}
+                                 f"{last_error()}")
+        columns = {"q_ref": sched.q_ref, "qd_ref": sched.qd_ref, "qdd_ref": sched.qdd_ref}
         R = np.hstack([columns[g] for g in groups])
         initial = [(ip, vrs("plant", [nm])[0], v) for nm, v in _plant_start_values(plant_robot, sched).items()]
         initial += [(ic, vr, float(v)) for vr, v in zip(ctrl_ref, R[0])]
@@ -497,13 +429,13 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
         for i, vr, value in initial:
             if not execution.real_initial_value(i, vr, value):
                 raise CosimError(f"libcosim refused the initial value {value!r} of variable {vr} of slave {i}: "
-                                 f"{_last_error()}")
+                                 f"{last_error()}")
 
         manipulator = CosimManipulator.create_override()
         observer = CosimObserver.create_last_value()
         held += [manipulator, observer]
         if not execution.add_manipulator(manipulator) or not execution.add_observer(observer):
-            raise CosimError(f"libcosim refused the manipulator or the observer: {_last_error()}")
+            raise CosimError(f"libcosim refused the manipulator or the observer: {last_error()}")
 
         steps = sched.steps
         Q = np.empty((steps + 1, n))
@@ -515,9 +447,9 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
         start = time.perf_counter()
         for k in range(steps):
             if not manipulator.slave_real_values(ic, ctrl_ref, rows[k]):
-                raise CosimError(f"libcosim refused the reference at t = {t[k]:g} s: {_last_error()}")
+                raise CosimError(f"libcosim refused the reference at t = {t[k]:g} s: {last_error()}")
             if not execution.step(1):
-                raise CosimError(f"libcosim step {k + 1} (t = {t[k]:g} s) failed: {_last_error()}")
+                raise CosimError(f"libcosim step {k + 1} (t = {t[k]:g} s) failed: {last_error()}")
             x = observer.last_real_values(ip, plant_x)
             Q[k + 1], QD[k + 1] = x[:n], x[n:]
             TAU[k] = observer.last_real_values(ip, plant_tau)
@@ -580,18 +512,15 @@ def closed_loop_through_fmu(robot: Robot, design: RobotDesign, trajectory: Traje
     saturate
         Clip at the design's torque limits.
     progress
-        ``progress(fraction, t, t_final)`` after every period (e.g. ``control_design.ProgressLine``).
+        ``progress(fraction, t, t_final)`` after every period (e.g. ``closed_loop.ProgressLine``).
     say
         Called with one line per stage (exports, run).
 
     Returns
     -------
     TrackingResult
-        As :func:`control_design.simulate.simulate_tracking` returns.
+        As :func:`closed_loop.simulate.simulate_tracking` returns.
     """
-    from .build import export_fmu
-    from .controller_fmu import controller_spec
-
     folder = Path(workdir)
     folder.mkdir(parents=True, exist_ok=True)
     plant = robot if plant is None else plant
@@ -613,8 +542,6 @@ def closed_loop_through_fmu(robot: Robot, design: RobotDesign, trajectory: Traje
             say(f"controller FMU {cpath}")
         key = ("controller", robot.description.digest(), robot.motor_model, spec.model_identifier,
                spec.p_start.tobytes(), spec.step, str(cpath.resolve()))
-        from .build import build_fmu
-
         ctrl = _cached_build(key, cpath, lambda: build_fmu(spec, cpath))
     if say is not None:
         say(f"closed loop: {design.kind} at {controller.rate_hz:g} Hz through {Path(plant_path).name}"

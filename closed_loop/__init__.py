@@ -1,0 +1,49 @@
+"""Closed loops: a controller driving a robot plant, in Python or through FMUs.
+
+The layer above the design (:mod:`control_design`) and the FMU export
+(:mod:`fmu`): one :class:`~closed_loop.schedule.Schedule` (control instants
+``t0 + k h``, references, start state, RK4 sub-steps) and one
+:class:`~closed_loop.result.TrackingResult` for every loop:
+
+* :func:`~closed_loop.simulate.simulate_tracking` - the pure Python loop (compiled dynamics, RK4);
+* :func:`~closed_loop.master.run_closed_loop` - the plant FMU (and a controller FMU) through FMPy;
+* :func:`~closed_loop.master.run_libcosim_closed_loop` - both FMUs connected in libcosim;
+* :class:`~closed_loop.delay.OnePeriodDelay` - the Python loop as libcosim's Jacobi coupling runs it;
+* :mod:`~closed_loop.controller_fmu` - the control laws as FMUs;
+* :mod:`~closed_loop.plots` and :mod:`~closed_loop.commands` (``manip track``).
+
+Dependencies point one way: ``model <- control_design <- closed_loop -> fmu``.
+"""
+
+from .controller_fmu import (CONTROLLER_FMU_KINDS, ControllerFmuReport, controller_fmu_kind, controller_spec,
+                             export_controller_fmu, validate_controller_fmu)
+from .delay import OnePeriodDelay
+from .master import closed_loop_through_fmu, run_closed_loop, run_libcosim_closed_loop
+from .plots import joint_plot, torque_plot, tracking_error_plot
+from .progress import ProgressLine
+from .result import TrackingMetrics, TrackingResult
+from .schedule import MAX_SUBSTEP, Schedule, default_substeps
+from .simulate import simulate_tracking
+
+__all__ = [
+    "CONTROLLER_FMU_KINDS",
+    "ControllerFmuReport",
+    "MAX_SUBSTEP",
+    "OnePeriodDelay",
+    "ProgressLine",
+    "Schedule",
+    "TrackingMetrics",
+    "TrackingResult",
+    "closed_loop_through_fmu",
+    "controller_fmu_kind",
+    "controller_spec",
+    "default_substeps",
+    "export_controller_fmu",
+    "joint_plot",
+    "run_closed_loop",
+    "run_libcosim_closed_loop",
+    "simulate_tracking",
+    "torque_plot",
+    "tracking_error_plot",
+    "validate_controller_fmu",
+]

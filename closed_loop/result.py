@@ -1,0 +1,120 @@
+"""The one result type of every closed loop: :class:`TrackingResult`, and its :class:`TrackingMetrics`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["TrackingMetrics", "TrackingResult"]
+
+
+@dataclass(frozen=True)
+class TrackingMetrics:
+    """Per-joint tracking numbers of one run (joint side unless ``_m``).
+
+    Attributes
+    ----------
+    controller, robot
+        Controller kind and robot name.
+    joints, units
+        Joint names and units of q.
+    rms_error, max_error
+        (n,) RMS and max |q_d - q| over the control samples, rad or m.
+    peak_motor_torque
+        (n,) max |tau_m|, N m.
+    peak_motor_velocity
+        (n,) max |G qd|, rad/s at the motor.
+    saturated_fraction
+        (n,) fraction of control periods with the torque at its limit.
+    rate_hz, wall_time
+        Control rate (Hz) and simulation wall time (s).
+    """
+
+    controller: str
+    robot: str
+    joints: tuple[str, ...]
+    units: tuple[str, ...]
+    rms_error: np.ndarray
+    max_error: np.ndarray
+    peak_motor_torque: np.ndarray
+    peak_motor_velocity: np.ndarray
+    saturated_fraction: np.ndarray
+    rate_hz: float
+    wall_time: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (arrays as lists, one entry per joint)."""
+        return {
+            "controller": self.controller, "robot": self.robot, "joints": list(self.joints), "units": list(self.units),
+            "rms_error": self.rms_error.tolist(), "max_error": self.max_error.tolist(),
+            "peak_motor_torque": self.peak_motor_torque.tolist(), "peak_motor_velocity": self.peak_motor_velocity.tolist(),
+            "saturated_fraction": self.saturated_fraction.tolist(), "rate_hz": self.rate_hz, "wall_time": self.wall_time,
+        }
+
+
+@dataclass(frozen=True)
+class TrackingResult:
+    """A closed-loop run sampled at the control instants.
+
+    Attributes
+    ----------
+    controller, robot, joints, units
+        Controller kind, robot name, joint names, units of q.
+    t
+        (N+1,) control instants ``t0 + k dt``, s.
+    q, qd
+        (N+1, n) plant state at those instants.
+    q_ref, qd_ref, qdd_ref
+        (N+1, n) reference.
+    tau_m
+        (N+1, n) motor torque applied from each instant on, N m.
+    G
+        (n,) reduction ratios.
+    tau_m_max
+        (n,) torque limits of the controller, N m, or None.
+    rate_hz, substeps, wall_time
+        Control rate (Hz), RK4 sub-steps per period, wall time (s).
+    """
+
+    controller: str
+    robot: str
+    joints: tuple[str, ...]
+    units: tuple[str, ...]
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    q_ref: np.ndarray
+    qd_ref: np.ndarray
+    qdd_ref: np.ndarray
+    tau_m: np.ndarray
+    G: np.ndarray
+    tau_m_max: np.ndarray | None
+    rate_hz: float
+    substeps: int
+    wall_time: float
+
+    @property
+    def error(self) -> np.ndarray:
+        """(N+1, n) tracking error ``q_ref - q``, rad or m."""
+        return self.q_ref - self.q
+
+    @property
+    def qd_m(self) -> np.ndarray:
+        """(N+1, n) motor velocity ``G qd``, rad/s."""
+        return self.qd * self.G
+
+    def metrics(self) -> TrackingMetrics:
+        """RMS / max error, peak motor torque and velocity, saturation per joint."""
+        e = self.error
+        if self.tau_m_max is None:
+            sat = np.zeros(self.G.size)
+        else:
+            sat = np.mean(np.abs(self.tau_m) >= self.tau_m_max * (1 - 1e-12), axis=0)
+        return TrackingMetrics(
+            controller=self.controller, robot=self.robot, joints=self.joints, units=self.units,
+            rms_error=np.sqrt(np.mean(e * e, axis=0)), max_error=np.max(np.abs(e), axis=0),
+            peak_motor_torque=np.max(np.abs(self.tau_m), axis=0), peak_motor_velocity=np.max(np.abs(self.qd_m), axis=0),
+            saturated_fraction=sat, rate_hz=self.rate_hz, wall_time=self.wall_time,
+        )
