@@ -7,7 +7,9 @@ CasADi's own evaluation and warn once.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import json
 import math
 import threading
 import warnings
@@ -19,7 +21,7 @@ import casadi as ca
 import numpy as np
 
 from ..arrays import finite_vector, shaped_vector
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, PointEvaluator, build_library
+from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, PointEvaluator, Progress, build_library
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import ParameterLayout, parameter_layout
@@ -28,19 +30,28 @@ from .symbolic import COMPILED_FUNCTIONS, DynamicsFunctions, build_functions
 __all__ = ["Dynamics", "NoCompilerWarning", "source_fingerprint"]
 
 
-_MODEL_SOURCES = (
-    *sorted(Path(__file__).resolve().parent.glob("*.py")),
-    Path(__file__).resolve().parents[1] / "kinematics.py",
-)
+_MODEL_DIR = Path(__file__).resolve().parents[1]
 
 
 def source_fingerprint() -> str:
-    """SHA-256 of the modules that build the symbolic model: editing them invalidates cached libraries."""
+    """SHA-256 of the modules that build the symbolic model and its code (``model/*.py``,
+    ``model/dynamics/*.py``): editing any of them invalidates cached libraries."""
     h = hashlib.sha256()
-    for path in _MODEL_SOURCES:
+    for path in (*sorted(_MODEL_DIR.glob("*.py")), *sorted((_MODEL_DIR / "dynamics").glob("*.py"))):
         h.update(path.name.encode())
         h.update(path.read_bytes())
     return h.hexdigest()
+
+
+def _description_key(description: RobotDescription) -> str:
+    """Everything of ``description`` the generated code can depend on (not its name, path or notes)."""
+    skip = ("name", "path", "description", "source", "extra", "rest", "links")
+    data = {f.name: getattr(description, f.name) for f in dataclasses.fields(description) if f.name not in skip}
+    data["links"] = [
+        {k: v for k, v in dataclasses.asdict(link).items() if k not in ("name", "qlim", "torque_limit")}
+        for link in description.links
+    ]
+    return hashlib.sha256(json.dumps(data, sort_keys=True, default=repr).encode()).hexdigest()
 
 
 class NoCompilerWarning(RuntimeWarning):
@@ -195,8 +206,16 @@ class Dynamics:
         """What the last :meth:`compile` did (None before it ran)."""
         return self._build_info
 
-    def compile(self, *, force: bool = False) -> BuildInfo:
+    def compile(self, *, force: bool = False, progress: Progress | None = None) -> BuildInfo:
         """Build (or load from the cache) the compiled library of the numeric API.
+
+        Parameters
+        ----------
+        force
+            Generate and compile again even if this object or the disk cache has the library.
+        progress
+            Called with a :class:`~model.codegen.BuildEvent` at each stage (symbolic model,
+            C generation with its size, compilation of each unit, link), or once for a cache hit.
 
         Raises :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
         """
@@ -204,10 +223,11 @@ class Dynamics:
             if self._library is not None and not force:
                 assert self._build_info is not None
                 return self._build_info
-            key = f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}|{source_fingerprint()}"
+            key = (f"{_description_key(self.description)}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}"
+                   f"|{source_fingerprint()}")
             stem = f"{self.description.name}-{self.motor_model}"
             funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
-            self._library, self._build_info = build_library(stem, key, funcs)
+            self._library, self._build_info = build_library(stem, key, funcs, force=force, progress=progress)
             self._fallback = False
             self._points = threading.local()
             return self._build_info
