@@ -15,7 +15,13 @@
 #define casadi_int long long int
 #define casadi_real double
 
-_Static_assert(sizeof(casadi_int) == 8, "casadi_int must be the 8-byte integer Python passes (ctypes.c_longlong)");
-_Static_assert(sizeof(casadi_real) == 8, "casadi_real must be the IEEE double Python passes (ctypes.c_double)");
+/* __extension__: no -Wpedantic warning for a C11 assertion in a C99 build (gcc and clang). */
+#if defined(__GNUC__)
+#define MW_EXTENSION __extension__
+#else
+#define MW_EXTENSION
+#endif
+MW_EXTENSION _Static_assert(sizeof(casadi_int) == 8, "casadi_int must be the 8-byte integer Python passes (ctypes.c_longlong)");
+MW_EXTENSION _Static_assert(sizeof(casadi_real) == 8, "casadi_real must be the IEEE double Python passes (ctypes.c_double)");
 
 #endif /* MW_CASADI_ABI_H */
