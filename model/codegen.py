@@ -44,6 +44,7 @@ import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
@@ -465,6 +466,7 @@ class PointEvaluator:
             raise RuntimeError(f"{self.name}: compiled evaluation failed with status {status}")
 
 
+@lru_cache(maxsize=None)
 def _source_hash() -> str:
     """SHA-256 of this module and the handwritten C it compiles in: part of every cache key."""
     h = hashlib.sha256()
@@ -485,6 +487,7 @@ def _key(key_material: str, compiler: str, optimisation: str | None) -> str:
     return h.hexdigest()
 
 
+@lru_cache(maxsize=None)
 def _compiler_version(compiler: str) -> str:
     try:
         return subprocess.run([compiler, "--version"], capture_output=True, text=True, check=False).stdout.splitlines()[0]
