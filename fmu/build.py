@@ -10,8 +10,10 @@ The FMU is made of
 * the FMI 2.0 headers that ship with FMPy (included from FMPy's folder at
   build time, copied only into the FMU's ``sources/``).
 
-Everything is compiled with gcc, strict warnings and hidden visibility, so the
-binary exports the ``fmi2`` functions only and needs nothing but libc and libm.
+Generation, compiler discovery and flags are those of :mod:`model.codegen`
+(the one CasADi -> C -> compiler pipeline), plus hidden visibility, so the
+binary exports the ``fmi2`` functions only and needs nothing but libc and libm;
+the units are compiled in parallel.
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 import casadi as ca
+
+from model.codegen import CompilerNotFoundError, compile_flags, compile_objects, find_compiler, generate_c
 
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
@@ -50,10 +54,11 @@ WRAPPER_SOURCES = ("fmi2_functions.c", "instance.c")
 WRAPPER_HEADERS = ("model.h", "instance.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 
-CFLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-fvisibility=hidden", "-fPIC")
-# CasADi's generated functions all share the signature (arg, res, iw, w, mem) and
-# leave some of those parameters unused; that one warning is relaxed for that file only.
-CASADI_CFLAGS = CFLAGS + ("-Wno-unused-parameter",)
+# model.codegen's policy (strict warnings, -ffp-contract=off) at -O2, with hidden symbols. CasADi's
+# generated functions leave some of their (arg, res, iw, w, mem) parameters unused: that one warning
+# is relaxed for the generated file only.
+CFLAGS = compile_flags(generated=False, optimisation="-O2") + ("-fvisibility=hidden",)
+CASADI_CFLAGS = compile_flags(generated=True, optimisation="-O2") + ("-fvisibility=hidden",)
 
 STAMP = "generated, do not edit"
 
@@ -181,7 +186,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         sources = root / "sources"
         sources.mkdir(parents=True)
         table, guid, c_files = generate_sources(spec, sources, progress=progress)
-        _say(progress, "compiling with gcc " + " ".join(CFLAGS))
+        _say(progress, f"compiling with {_compiler()} " + " ".join(CFLAGS))
         binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
         _compile(sources, c_files, binary, Path(tmp) / "obj")
         # importers that rebuild from sources/ need the FMI headers next to the code
@@ -245,21 +250,13 @@ def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
         ca.Function(f"{fid}_out_dir", [x, u, p, dx, du, dp], [ca.jtimes(y, z, dz)],
                     ["x", "u", "p", "dx", "du", "dp"], ["dy"]),
     ]
-    cg = ca.CodeGenerator(file_name, {"with_header": True, "casadi_int": "long long int", "casadi_real": "double"})
-    for f in functions:
-        cg.add(f)
-    # generate(prefix) writes prefix + file name (and the header): no os.chdir, which is process-wide
-    cg.generate(str(sources.resolve()) + os.sep)
     stamp = (f"/* {STAMP}: CasADi code of the model {fid} (ode, out and their forward-mode\n"
              f" * directional derivatives), written by fmu/build.py. The exported functions are\n"
              f" * hidden: the FMU's binary exports the fmi2 functions only. */\n")
     visibility = ("#if defined(__GNUC__) && !defined(CASADI_SYMBOL_EXPORT)\n"
                   "#define CASADI_SYMBOL_EXPORT __attribute__((visibility(\"hidden\")))\n"
                   "#endif\n")
-    c_path = sources / file_name
-    h_path = c_path.with_suffix(".h")
-    c_path.write_text(stamp + visibility + c_path.read_text())
-    h_path.write_text(stamp + h_path.read_text())
+    generate_c(functions, sources / file_name, with_header=True, preamble=stamp + visibility)
 
 
 def _guid(spec: ModelSpec, sources: Path, table: VariableTable) -> str:
@@ -278,20 +275,22 @@ def _run(cmd: list[str], what: str) -> None:
         raise FmuBuildError(f"{what} failed (exit {proc.returncode}):\n$ {' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
 
 
+def _compiler() -> str:
+    try:
+        return find_compiler()
+    except CompilerNotFoundError as exc:
+        raise FmuBuildError(str(exc)) from None
+
+
 def _compile(sources: Path, c_files: list[str], binary: Path, obj_dir: Path) -> None:
-    cc = os.environ.get("CC", "gcc")
-    if shutil.which(cc) is None:
-        raise FmuBuildError(f"compiler: expected {cc!r} on PATH (set CC to choose another)")
+    cc = _compiler()
     obj_dir.mkdir(parents=True, exist_ok=True)
     include = [f"-I{sources}", f"-I{fmi_headers_dir()}"]
-    objects = []
-    for name in c_files:
-        flags = CASADI_CFLAGS if name.endswith("_casadi.c") else CFLAGS
-        obj = obj_dir / (Path(name).stem + ".o")
-        _run([cc, *flags, *include, "-c", str(sources / name), "-o", str(obj)], f"compiling {name}")
-        objects.append(str(obj))
+    units = [(sources / name, obj_dir / (Path(name).stem + ".o"),
+              (*(CASADI_CFLAGS if name.endswith("_casadi.c") else CFLAGS), *include)) for name in c_files]
+    compile_objects(cc, units, error=FmuBuildError)
     binary.parent.mkdir(parents=True, exist_ok=True)
-    _run([cc, "-shared", "-o", str(binary), *objects, "-Wl,--no-undefined", "-Wl,--as-needed", "-lm"],
+    _run([cc, "-shared", "-o", str(binary), *[str(u[1]) for u in units], "-Wl,--no-undefined", "-Wl,--as-needed", "-lm"],
          f"linking {binary.name}")
 
 
@@ -299,9 +298,7 @@ def build_driver(executable: str | os.PathLike[str]) -> Path:
     """Compile ``fmu/c/fmu_driver.c``, the plain C importer of the valgrind test and the benchmark."""
     executable = Path(executable)
     executable.parent.mkdir(parents=True, exist_ok=True)
-    cc = os.environ.get("CC", "gcc")
-    if shutil.which(cc) is None:
-        raise FmuBuildError(f"compiler: expected {cc!r} on PATH (set CC to choose another)")
+    cc = _compiler()
     flags = [f for f in CFLAGS if f != "-fPIC"]
     _run([cc, *flags, "-g", f"-I{fmi_headers_dir()}", str(C_DIR / "fmu_driver.c"), "-o", str(executable),
           "-ldl", "-lm"], "compiling fmu_driver.c")

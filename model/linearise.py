@@ -9,10 +9,16 @@ Coulomb friction ``|G| Tc(sign qd)`` is piecewise constant in ``qd``: its
 derivative is 0 wherever ``qd_i != 0``, and the Jacobian returns 0 at
 ``qd_i = 0`` too, where the friction is discontinuous (a dead zone of width
 ``2 |G| Tc`` that no linear model represents). Viscous friction enters A.
+
+The symbolic plant and its Jacobians are built once per :class:`~model.robot.Robot`
+object (kept while the robot lives); later calls only evaluate them.
 """
 
 from __future__ import annotations
 
+import threading
+import weakref
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import casadi as ca
@@ -26,6 +32,36 @@ __all__ = ["linearise", "OUTPUT_KINDS"]
 
 #: Output groups accepted by :func:`linearise`.
 OUTPUT_KINDS: tuple[str, ...] = ("q", "qd", "qm")
+
+
+@dataclass(frozen=True)
+class _Linearisation:
+    """The Jacobians of one robot's plant, ``(x, u, p) -> (A, B)``, and the plant's signal names."""
+
+    jacobians: ca.Function
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+
+
+_BUILT: "weakref.WeakKeyDictionary[Robot, _Linearisation]" = weakref.WeakKeyDictionary()
+_LOCK = threading.Lock()
+
+
+def _linearisation(robot: Robot) -> _Linearisation:
+    """The cached :class:`_Linearisation` of ``robot``; built (plant, then exact Jacobians) on first use."""
+    with _LOCK:
+        built = _BUILT.get(robot)
+        if built is None:
+            plant = build_plant(robot)
+            x = ca.SX.sym("x", plant.nx)
+            u = ca.SX.sym("u", plant.nu)
+            p = ca.SX.sym("p", len(plant.param_names))
+            xdot = plant.ode(x, u, p)
+            jac = ca.Function("linearisation", [x, u, p], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
+                              ["x", "u", "p"], ["A", "B"])
+            built = _Linearisation(jac, tuple(plant.state_names), tuple(plant.input_names))
+            _BUILT[robot] = built
+        return built
 
 
 def _output_matrix(robot: Robot, outputs: str | Sequence[str] | Any) -> tuple[np.ndarray, list[str]]:
@@ -85,17 +121,11 @@ def linearise(robot: Robot, q0: Any, qd0: Any = None, u0: Any = None, outputs: s
     u0v = robot.rne(q0v, qd0v, np.zeros(n)) / G if u0 is None else as_joint_vector(u0, n, "u0")
     C, out_names = _output_matrix(robot, outputs)
 
-    plant = build_plant(robot)
-    x = ca.SX.sym("x", 2 * n)
-    u = ca.SX.sym("u", n)
-    p = ca.SX.sym("p", len(plant.param_names))
-    xdot = plant.ode(x, u, p)
-    jac = ca.Function("linearisation", [x, u, p], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
-                      ["x", "u", "p"], ["A", "B"])
-    A, B = (np.array(m) for m in jac(np.concatenate([q0v, qd0v]), u0v, robot.parameters.vector))
+    lin = _linearisation(robot)
+    A, B = (np.array(m) for m in lin.jacobians(np.concatenate([q0v, qd0v]), u0v, robot.parameters.vector))
     D = np.zeros((C.shape[0], n))
     return control.ss(
         A, B, C, D,
-        states=list(plant.state_names), inputs=list(plant.input_names), outputs=out_names,
+        states=list(lin.state_names), inputs=list(lin.input_names), outputs=out_names,
         name=f"{robot.name}_linear",
     )

@@ -19,6 +19,8 @@ from .description import RobotDescription, load_description
 from .kinematics import KinematicsFunctions, build_kinematics
 
 if TYPE_CHECKING:  # pragma: no cover
+    import control
+
     from .dynamics import Dynamics, DynamicsParameters, Workspace
     from .ik import IKResult, IKSolution
     from .singularity import SingularityReport
@@ -209,6 +211,16 @@ class Robot:
               ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint accelerations under joint torques ``tau`` (forward dynamics)."""
         return self.dynamics.accel(q, qd, tau, self._parameters if p is None else p, ws=ws)
+
+    def linearise(self, q0: Any, qd0: Any = None, u0: Any = None,
+                  outputs: str | Sequence[str] | Any = "q") -> "control.StateSpace":
+        """Linear model about ``(q0, qd0, u0)`` as a ``control.StateSpace``; see :func:`model.linearise.linearise`.
+
+        The symbolic plant and its Jacobians are built on the first call and reused.
+        """
+        from .linearise import linearise
+
+        return linearise(self, q0, qd0, u0, outputs)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays."""

@@ -87,3 +87,31 @@ def test_output_matrix_and_bad_outputs():
         linearise(robot, robot.q_rest, outputs=np.ones((2, 3)))
     with pytest.raises(ValueError, match=r"^q0: expected 2 joint values"):
         linearise(robot, np.zeros(3))
+
+
+def test_the_plant_jacobians_are_built_once_per_robot_and_follow_the_parameters():
+    """Robot.linearise equals the free function; the second call reuses the Jacobians and still reads p.
+
+    Equality is exact: the same cached Function evaluated at the same point.
+    """
+    from model.linearise import _linearisation
+
+    robot = _robot("scara")
+    q0 = robot.q_rest + 0.2
+    first = linearise(robot, q0, outputs=["q", "qd"])
+    built = _linearisation(robot)
+    again = robot.linearise(q0, outputs=["q", "qd"])
+    assert _linearisation(robot) is built
+    np.testing.assert_array_equal(again.A, first.A)
+    np.testing.assert_array_equal(again.B, first.B)
+    np.testing.assert_array_equal(again.C, first.C)
+    assert again.state_labels == first.state_labels and again.output_labels == first.output_labels
+    robot.dynamics.set_payload(3.0, (0.0, 0.0, 0.05))
+    heavy = robot.linearise(q0)
+    fresh = _robot("scara")
+    fresh.dynamics.set_payload(3.0, (0.0, 0.0, 0.05))
+    reference = linearise(fresh, q0)
+    assert _linearisation(fresh) is not built
+    assert np.abs(heavy.B - first.B).max() > 1e-3 * np.abs(first.B).max()  # the payload changed B
+    np.testing.assert_array_equal(heavy.A, reference.A)
+    np.testing.assert_array_equal(heavy.B, reference.B)

@@ -73,14 +73,16 @@ def format_build(info) -> str:
     """One line per stage of a :class:`model.codegen.BuildInfo`."""
     if info.cached:
         return f"loaded from the cache in {info.seconds_total:.3f} s: {info.library}"
+    levels = " ".join(sorted({u.optimisation for u in info.units}))
     return (f"cold build in {info.seconds_total:.2f} s (symbolic {info.seconds_symbolic:.2f} s, C generation "
-            f"{info.seconds_generate:.2f} s, {info.compiler} {' '.join(info.flags)} {info.seconds_compile:.2f} s): "
-            f"{info.library}")
+            f"{info.seconds_generate:.2f} s, {info.c_bytes / 1e6:.2f} MB; {info.compiler} {' '.join(info.flags)} "
+            f"{levels} {info.seconds_compile:.2f} s): {info.library}")
 
 
 def _cmd_build(args: argparse.Namespace) -> int:
     robot = model.load_robot(args.robot, motor_model=args.motor_model)
-    print(f"{robot.name} ({args.motor_model} motors): {format_build(robot.dynamics.compile(force=args.force))}")
+    info = robot.dynamics.compile(force=args.force, progress=lambda event: print(f"manip build: {event}", file=sys.stderr, flush=True))
+    print(f"{robot.name} ({args.motor_model} motors): {format_build(info)}")
     return 0
 
 
@@ -104,7 +106,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("build", help="generate, compile and cache a robot's dynamics C; report the build time")
     p.add_argument("robot", help="built-in name or TOML file")
     p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected", help="default reflected")
-    p.add_argument("--force", action="store_true", help="rebuild even when the cache has it")
+    p.add_argument("--force", action="store_true", help="generate and compile again even when the cache has it")
     p.set_defaults(func=_cmd_build)
     register_model(sub)
     register_control(sub)

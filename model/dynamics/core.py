@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 from ..arrays import finite_vector, shaped_vector
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, build_library
+from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, Progress, build_library
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
@@ -29,17 +29,14 @@ from .workspace import Workspace
 __all__ = ["Dynamics", "NoCompilerWarning", "source_fingerprint"]
 
 
-_MODEL_SOURCES = (
-    *sorted(Path(__file__).resolve().parent.glob("*.py")),
-    Path(__file__).resolve().parents[1] / "kinematics.py",
-    Path(__file__).resolve().parents[1] / "chain.py",
-)
+_MODEL_DIR = Path(__file__).resolve().parents[1]
 
 
 def source_fingerprint() -> str:
-    """SHA-256 of the modules that build the symbolic model: editing them invalidates cached libraries."""
+    """SHA-256 of the modules that build the symbolic model and its code (``model/*.py``,
+    ``model/dynamics/*.py``): editing any of them invalidates cached libraries."""
     h = hashlib.sha256()
-    for path in _MODEL_SOURCES:
+    for path in (*sorted(_MODEL_DIR.glob("*.py")), *sorted((_MODEL_DIR / "dynamics").glob("*.py"))):
         h.update(path.name.encode())
         h.update(path.read_bytes())
     return h.hexdigest()
@@ -151,8 +148,16 @@ class Dynamics:
         """What the last :meth:`compile` did (None before it ran)."""
         return self._build_info
 
-    def compile(self, *, force: bool = False) -> BuildInfo:
+    def compile(self, *, force: bool = False, progress: Progress | None = None) -> BuildInfo:
         """Build (or load from the cache) the compiled library of the numeric API.
+
+        Parameters
+        ----------
+        force
+            Generate and compile again even if this object or the disk cache has the library.
+        progress
+            Called with a :class:`~model.codegen.BuildEvent` at each stage (symbolic model,
+            C generation with its size, compilation of each unit, link), or once for a cache hit.
 
         Raises :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
         """
@@ -160,10 +165,11 @@ class Dynamics:
             if self._library is not None and not force:
                 assert self._build_info is not None
                 return self._build_info
-            key = f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}|{source_fingerprint()}"
+            key = (f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}"
+                   f"|{source_fingerprint()}")
             stem = f"{self.description.identifier}-{self.motor_model}"
             funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
-            self._library, self._build_info = build_library(stem, key, funcs)
+            self._library, self._build_info = build_library(stem, key, funcs, force=force, progress=progress)
             self._fallback = False
             self._pool = []
             return self._build_info

@@ -10,7 +10,9 @@
  */
 #include <stdlib.h>
 
-typedef long long int mw_int;
+#include "casadi_abi.h"
+
+typedef casadi_int mw_int;
 typedef int (*mw_eval_fn)(const double **arg, double **res, mw_int *iw, double *w, int mem);
 typedef int (*mw_work_fn)(mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
 
