@@ -11,7 +11,8 @@ derivative is 0 wherever ``qd_i != 0``, and the Jacobian returns 0 at
 ``2 |G| Tc`` that no linear model represents). Viscous friction enters A.
 
 The symbolic plant and its Jacobians are built once per :class:`~model.robot.Robot`
-object (kept while the robot lives); later calls only evaluate them.
+model (kept while its :class:`~model.dynamics.Dynamics` lives, and shared by the robots that
+``with_parameters`` makes from it); later calls only evaluate them at the robot's parameters.
 """
 
 from __future__ import annotations
@@ -43,14 +44,15 @@ class _Linearisation:
     input_names: tuple[str, ...]
 
 
-_BUILT: "weakref.WeakKeyDictionary[Robot, _Linearisation]" = weakref.WeakKeyDictionary()
+# Keyed by the robot's Dynamics: robots made by ``with_parameters`` share it, and so share the Jacobians.
+_BUILT: "weakref.WeakKeyDictionary[Any, _Linearisation]" = weakref.WeakKeyDictionary()
 _LOCK = threading.Lock()
 
 
 def _linearisation(robot: Robot) -> _Linearisation:
     """The cached :class:`_Linearisation` of ``robot``; built (plant, then exact Jacobians) on first use."""
     with _LOCK:
-        built = _BUILT.get(robot)
+        built = _BUILT.get(robot.dynamics)
         if built is None:
             plant = build_plant(robot)
             x = ca.SX.sym("x", plant.nx)
@@ -60,7 +62,7 @@ def _linearisation(robot: Robot) -> _Linearisation:
             jac = ca.Function("linearisation", [x, u, p], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
                               ["x", "u", "p"], ["A", "B"])
             built = _Linearisation(jac, tuple(plant.state_names), tuple(plant.input_names))
-            _BUILT[robot] = built
+            _BUILT[robot.dynamics] = built
         return built
 
 

@@ -106,10 +106,11 @@ def test_the_plant_jacobians_are_built_once_per_robot_and_follow_the_parameters(
     np.testing.assert_array_equal(again.B, first.B)
     np.testing.assert_array_equal(again.C, first.C)
     assert again.state_labels == first.state_labels and again.output_labels == first.output_labels
-    robot.dynamics.set_payload(3.0, (0.0, 0.0, 0.05))
-    heavy = robot.linearise(q0)
+    loaded = robot.with_parameters(robot.parameters.with_payload(3.0, (0.0, 0.0, 0.05)))
+    heavy = loaded.linearise(q0)
+    assert _linearisation(loaded) is built  # the same model: the Jacobians are shared, p is an input
     fresh = _robot("scara")
-    fresh.dynamics.set_payload(3.0, (0.0, 0.0, 0.05))
+    fresh = fresh.with_parameters(fresh.parameters.with_payload(3.0, (0.0, 0.0, 0.05)))
     reference = linearise(fresh, q0)
     assert _linearisation(fresh) is not built
     assert np.abs(heavy.B - first.B).max() > 1e-3 * np.abs(first.B).max()  # the payload changed B
