@@ -7,11 +7,15 @@ The FMU is made of
 * ``model_data.h`` / ``model_data.c`` and ``modelDescription.xml``, rendered
   from the one variable table of :mod:`fmu.variables`;
 * the FMI wrapper of ``fmu/c/``, written once and shared by every model;
-* the FMI 2.0 headers that ship with FMPy (included from FMPy's folder at
-  build time, copied only into the FMU's ``sources/``).
+* the standard FMI 2.0.1 headers (``fmu/c/fmi2/``, BSD-2 licence of the
+  Modelica Association, notice in each file), which honour
+  ``FMI2_FUNCTION_PREFIX``: a source FMU compiled with it links statically
+  next to other FMUs (the wrapper's internal functions take the prefix too).
 
-Everything is compiled with gcc, strict warnings and hidden visibility, so the
-binary exports the ``fmi2`` functions only and needs nothing but libc and libm.
+Everything is compiled with gcc, strict warnings, hidden visibility and no
+floating-point contraction (``-ffp-contract=off``: no fused multiply-add, so
+gcc and clang give the same numbers), so the binary exports the ``fmi2``
+functions only and needs nothing but libc and libm.
 """
 
 from __future__ import annotations
@@ -50,7 +54,7 @@ WRAPPER_SOURCES = ("fmi2_functions.c", "instance.c")
 WRAPPER_HEADERS = ("model.h", "instance.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 
-CFLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-fvisibility=hidden", "-fPIC")
+CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-Werror", "-fvisibility=hidden", "-fPIC")
 # CasADi's generated functions all share the signature (arg, res, iw, w, mem) and
 # leave some of those parameters unused; that one warning is relaxed for that file only.
 CASADI_CFLAGS = CFLAGS + ("-Wno-unused-parameter",)
@@ -65,13 +69,11 @@ class FmuBuildError(RuntimeError):
 
 
 def fmi_headers_dir() -> Path:
-    """The folder of the FMI 2.0 C headers shipped inside the installed FMPy package."""
-    import fmpy
-
-    folder = Path(fmpy.__file__).resolve().parent / "c-code"
+    """The folder of the standard FMI 2.0.1 C headers (``fmu/c/fmi2``), shipped in every FMU's ``sources/``."""
+    folder = C_DIR / "fmi2"
     missing = [h for h in FMI_HEADERS if not (folder / h).is_file()]
     if missing:
-        raise FmuBuildError(f"FMI 2.0 headers: expected {missing} in {folder} (FMPy's c-code folder)")
+        raise FmuBuildError(f"FMI 2.0 headers: expected {missing} in {folder}")
     return folder
 
 
@@ -184,10 +186,6 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         _say(progress, "compiling with gcc " + " ".join(CFLAGS))
         binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
         _compile(sources, c_files, binary, Path(tmp) / "obj")
-        # importers that rebuild from sources/ need the FMI headers next to the code
-        headers = fmi_headers_dir()
-        for name in FMI_HEADERS:
-            shutil.copyfile(headers / name, sources / name)
         from . import __version__
 
         (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, __version__))
@@ -206,8 +204,7 @@ def generate_sources(spec: ModelSpec, sources: Path, *, progress: Progress | Non
     """Write every C source and header of the FMU into ``sources``.
 
     Returns the variable table, the GUID and the names of the ``.c`` files.
-    The FMI headers are not copied here: the build includes them from FMPy's
-    folder, and :func:`build_fmu` adds copies to the FMU's ``sources/`` after.
+    The standard FMI headers are copied too: ``sources/`` compiles on its own.
     """
     fid = spec.model_identifier
     _say(progress, f"generating C with casadi.CodeGenerator ({spec.ode.n_instructions()} instructions in ode, "
@@ -219,6 +216,9 @@ def generate_sources(spec: ModelSpec, sources: Path, *, progress: Progress | Non
 
     for name in WRAPPER_SOURCES + WRAPPER_HEADERS:
         shutil.copyfile(C_DIR / name, sources / name)
+    headers = fmi_headers_dir()
+    for name in FMI_HEADERS:
+        shutil.copyfile(headers / name, sources / name)
 
     guid = _guid(spec, sources, table)
     (sources / "model_data.h").write_text(table.model_data_h(guid))
@@ -283,7 +283,7 @@ def _compile(sources: Path, c_files: list[str], binary: Path, obj_dir: Path) -> 
     if shutil.which(cc) is None:
         raise FmuBuildError(f"compiler: expected {cc!r} on PATH (set CC to choose another)")
     obj_dir.mkdir(parents=True, exist_ok=True)
-    include = [f"-I{sources}", f"-I{fmi_headers_dir()}"]
+    include = [f"-I{sources}"]
     objects = []
     for name in c_files:
         flags = CASADI_CFLAGS if name.endswith("_casadi.c") else CFLAGS

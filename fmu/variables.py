@@ -32,6 +32,9 @@ import numpy as np
 __all__ = [
     "TEMPLATE_DIR",
     "MIN_STEP",
+    "MAX_SUBSTEPS",
+    "SUBSTEP_RTOL",
+    "substeps",
     "Quantity",
     "ModelSpec",
     "Variable",
@@ -48,10 +51,30 @@ __all__ = [
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 STEP_NAME = "internal_step"
 #: Smallest internal step, s: the check of :class:`ModelSpec` and the ``min`` of ``internal_step`` in the XML.
-MIN_STEP = 1e-9
+#: With at most :data:`MAX_SUBSTEPS` sub-steps per ``fmi2DoStep`` it bounds the work of one call.
+MIN_STEP = 1e-6
+#: Most RK4 sub-steps of one ``fmi2DoStep`` (``MW_MAX_SUBSTEPS`` of ``fmu/c/instance.h``); more is an fmi2Error.
+MAX_SUBSTEPS = 1_000_000
+#: Relative noise of ``h / internal_step`` forgiven when counting sub-steps (``MW_SUBSTEP_RTOL``).
+SUBSTEP_RTOL = 1e-8
 
 # Names of the FMI variables that the table itself chooses.
 _STRUCTURED = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?)*")
+
+
+def substeps(h: float, internal_step: float) -> int:
+    """RK4 sub-steps of a communication step ``h`` (s), as ``mw_substeps`` of ``fmu/c/instance.c`` counts them.
+
+    ``ceil(h / internal_step)``, except that a ratio within a relative
+    :data:`SUBSTEP_RTOL` of an integer k gives k; 0 above :data:`MAX_SUBSTEPS`.
+    """
+    ratio = h / internal_step
+    if not (ratio > 0 and math.isfinite(ratio)):
+        return 0
+    nearest = math.floor(ratio + 0.5)
+    n = nearest if abs(ratio - nearest) <= SUBSTEP_RTOL * ratio else math.ceil(ratio)
+    n = max(n, 1)
+    return n if n <= MAX_SUBSTEPS else 0
 
 
 def is_structured_name(name: str) -> bool:
@@ -146,7 +169,7 @@ class Variable:
     start: float | None
     unit: str
     description: str
-    settable: str        # never, initial, tunable, input (see fmu/c/model.h)
+    settable: str        # never, initial, tunable, input, state (see fmu/c/model.h)
     min: float | None = None
     max: float | None = None
     derivative_of: int | None = None  # vr of the state this is the derivative of
@@ -224,7 +247,7 @@ class VariableTable:
         kinds = {"state": "MW_KIND_STATE", "derivative": "MW_KIND_DERIVATIVE", "input": "MW_KIND_INPUT",
                  "parameter": "MW_KIND_PARAMETER", "output": "MW_KIND_OUTPUT", "step": "MW_KIND_STEP"}
         settable = {"never": "MW_SET_NEVER", "initial": "MW_SET_INITIAL", "tunable": "MW_SET_TUNABLE",
-                    "input": "MW_SET_INPUT"}
+                    "input": "MW_SET_INPUT", "state": "MW_SET_STATE"}
         rows = []
         for v in self.variables:
             lo = "-HUGE_VAL" if v.min is None else _c_number(v.min)
@@ -355,7 +378,7 @@ def build_table(spec: ModelSpec) -> VariableTable:
 
     states = [add(name=q.name, kind="state", index=i, causality="output" if i in state_is_output else "local",
                   variability="continuous", initial="exact", start=float(spec.x_start[i]), unit=q.unit,
-                  description=q.description, settable="initial")
+                  description=q.description, settable="state")
               for i, q in enumerate(spec.states)]
     derivs = [add(name=f"der({q.name})", kind="derivative", index=i, causality="local", variability="continuous",
                   initial="calculated", start=None, unit=derivative_unit(q.unit),
@@ -375,7 +398,8 @@ def build_table(spec: ModelSpec) -> VariableTable:
     add(name=STEP_NAME, kind="step", index=0, causality="parameter", variability="fixed", initial="exact",
         start=float(spec.step), unit="s", min=MIN_STEP, settable="initial",
         description="step of the co-simulation integrator (classical RK4): a communication step h "
-                    "takes ceil(h / internal_step) equal sub-steps")
+                    "takes ceil(h / internal_step) equal sub-steps (k if h / internal_step is within a "
+                    f"relative {SUBSTEP_RTOL:g} of an integer k), at most {MAX_SUBSTEPS} per fmi2DoStep")
 
     names = [v.name for v in variables]
     duplicates = sorted({n for n in names if names.count(n) > 1})

@@ -111,12 +111,12 @@ def test_spec_rejects_bad_input():
 def test_spec_rejects_a_step_below_the_minimum_declared_in_the_xml():
     from fmu.variables import MIN_STEP
 
-    with pytest.raises(ValueError, match=r"step: expected an internal step of at least 1e-09 s "
-                                         r"\(the min of internal_step\), got 1e-10"):
-        trivial_spec(1e-10)
+    with pytest.raises(ValueError, match=r"step: expected an internal step of at least 1e-06 s "
+                                         r"\(the min of internal_step\), got 1e-07"):
+        trivial_spec(1e-7)
     table = build_table(trivial_spec(MIN_STEP))
     step = next(v for v in table.variables if v.name == "internal_step")
-    assert step.min == MIN_STEP == 1e-9 and step.start == MIN_STEP
+    assert step.min == MIN_STEP == 1e-6 and step.start == MIN_STEP
     root = ET.fromstring(table.model_description("{guid}", [], "0"))
     xml = next(v for v in root.find("ModelVariables") if v.get("name") == "internal_step")
     assert float(xml.find("Real").get("min")) == MIN_STEP
@@ -154,7 +154,7 @@ def test_binary_exports_only_fmi2_and_needs_only_libc_and_libm():
     assert set(facts["needed"]) <= {"libc.so.6", "libm.so.6"}
 
 
-def test_generated_files_are_stamped_and_headers_come_from_fmpy():
+def test_generated_files_are_stamped_and_the_standard_headers_are_shipped():
     with zipfile.ZipFile(scara_fmu()) as zf:
         names = set(zf.namelist())
         for generated in ("sources/model_data.c", "sources/model_data.h", "sources/scara_casadi.c",
@@ -163,7 +163,11 @@ def test_generated_files_are_stamped_and_headers_come_from_fmpy():
         header = zf.read("sources/model_data.h").decode()
     assert {f"sources/{h}" for h in FMI_HEADERS} <= names
     assert "binaries/linux64/scara.so" in names
-    assert not any((C_DIR / h).exists() for h in FMI_HEADERS)   # no copies in the repository
+    # the standard headers, which honour FMI2_FUNCTION_PREFIX (FMPy's copies drop the prefix), licence kept
+    with zipfile.ZipFile(scara_fmu()) as zf:
+        functions_h = zf.read("sources/fmi2Functions.h").decode()
+    assert "#define fmi2FullName(name) fmi2PasteB(FMI2_FUNCTION_PREFIX, name)" in functions_h
+    assert "2-Clause BSD License" in functions_h
     assert "#define MW_VR_tau_m_1 16u /* tau_m[1] */" in header
 
 
@@ -233,8 +237,8 @@ def test_cli_export_fmu_rejects_a_bad_step(capsys):
         main(["export-fmu", "scara", "-o", "x.fmu", "--step", "-1"])
     assert "expected a positive finite step in s, got '-1'" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        main(["export-fmu", "scara", "-o", "x.fmu", "--step", "1e-10"])
-    assert "expected an internal step of at least 1e-09 s, got '1e-10'" in capsys.readouterr().err
+        main(["export-fmu", "scara", "-o", "x.fmu", "--step", "1e-7"])
+    assert "expected an internal step of at least 1e-06 s, got '1e-7'" in capsys.readouterr().err
 
 
 def test_export_leaves_the_working_directory_alone(tmp_path, monkeypatch):
