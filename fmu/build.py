@@ -125,7 +125,8 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     Raises
     ------
     ValueError
-        Bad step or motor model, unknown robot.
+        Bad step or motor model, unknown robot; :class:`fmu.export_checks.SingularInertiaError`
+        (a ``RobotDescriptionError``) when ``B(q)`` is singular, naming the joint.
     FmuBuildError
         Not on Linux, or the generated C did not compile.
     """
@@ -138,6 +139,9 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
             robot = Robot(robot.description, motor_model=motor_model)
     else:
         robot = load_robot(robot_or_name, motor_model=motor_model)
+    from .export_checks import check_inertia
+
+    check_inertia(robot)  # a singular B(q) is refused here, naming the joint, not at the importer's first call
     digest = robot.description.digest()
     robot_ref = _robot_reference(robot.description)
     _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {motor_model} motors)")

@@ -302,12 +302,24 @@ def test_a_step_past_the_stop_time_is_an_error():
         h.close()
 
 
-def test_set_time_past_the_stop_time_is_an_error():
+def test_model_exchange_past_the_stop_time_is_an_error():
+    """An accepted integrator step, or event mode, past stopTime is an error; a trial point inside a step is not
+    (CVode evaluates past its output point and interpolates back)."""
     h = _with_stop_time("me", 1.0)
     try:
         h.fmu.enterContinuousTimeMode()
+        assert status_of(h.fmu.setTime, 1.001) == fmi2OK       # a trial point of the integrator
         assert status_of(h.fmu.setTime, 1.0) == fmi2OK
-        assert status_of(h.fmu.setTime, 1.001) == fmi2Error
+        assert h.fmu.completedIntegratorStep() == (False, False)
+        h.fmu.setTime(1.001)
+        assert status_of(h.fmu.completedIntegratorStep) == fmi2Error
+        assert_logged(h, fmi2Error, "logStatusError", "fmi2CompletedIntegratorStep: an integrator step completed at "
+                      "t = 1.0009999999999999, past the stopTime 1 ")
+    finally:
+        h.close()
+    h = _with_stop_time("me", 1.0)
+    try:
+        assert status_of(h.fmu.setTime, 1.001) == fmi2Error     # event mode
         assert_logged(h, fmi2Error, "logStatusError", "fmi2SetTime: time 1.0009999999999999 is past the stopTime 1 ")
     finally:
         h.close()

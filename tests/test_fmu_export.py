@@ -297,3 +297,66 @@ def test_wrapper_compiles_cleanly_with_pedantic_warnings(tmp_path):
                                "-Wstrict-prototypes", "-Werror", f"-I{C_DIR}", f"-I{fmi_headers_dir()}", "-c",
                                str(C_DIR / name), "-o", str(tmp_path / "x.o")], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
+
+
+# ------------------------------------------------------- refused at export time
+
+def _planar2r_with_link2(tmp_path, **link2) -> Path:
+    """planar2r.toml with link 2's fields replaced (written to a file, so errors name it)."""
+    from model.description import BUILTIN_DIR
+
+    text = (BUILTIN_DIR / "planar2r.toml").read_text()
+    head, first, second = text.split("[[links]]")
+    for key, value in link2.items():
+        second = re.sub(rf"(?m)^{key} = .*$", f"{key} = {value}", second)
+    path = tmp_path / "planar2r_mod.toml"
+    path.write_text(head + "[[links]]" + first + "[[links]]" + second)
+    return path
+
+
+@pytest.mark.parametrize("link2", [
+    # massless link 2 without motor inertia: B's row and column 2 are zero
+    {"mass": 0.0, "inertia": "[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]", "motor_inertia": 0.0, "rotor_mass": 0.0},
+    # mass on the joint 2 axis, no inertia about it, no motor: joint 2 moves nothing
+    {"com": "[-1.0, 0.0, 0.0]", "inertia": "[0.1, 10.0, 0.0, 0.0, 0.0, 0.0]", "motor_inertia": 0.0},
+])
+def test_a_robot_with_a_singular_inertia_matrix_is_refused_at_export(tmp_path, link2):
+    """A singular B(q) would make the FMU's derivatives non-finite: refused, one line naming the joint."""
+    from fmu.export_checks import SingularInertiaError, check_inertia
+
+    path = _planar2r_with_link2(tmp_path, **link2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        robot = load_robot(str(path))
+        # the reference: B(q) itself is singular, and joint 2's diagonal entry is (numerically) zero
+        B = robot.inertia(robot.q_rest)
+        assert abs(B[1, 1]) < 1e-12 * np.abs(B).max()
+        message = rf"^{re.escape(str(path))}, link 2: the inertia matrix B\(q\) is singular .*joint 2 moves no mass"
+        with pytest.raises(SingularInertiaError, match=message):
+            check_inertia(robot)
+        with pytest.raises(SingularInertiaError, match=message):
+            fmu.export_fmu(robot, tmp_path / "singular.fmu")
+    assert not (tmp_path / "singular.fmu").exists()
+    assert isinstance(SingularInertiaError("x"), ValueError)
+
+
+def test_cli_export_of_a_singular_robot_exits_2_with_one_line(tmp_path, capsys):
+    from workbench.cli import main
+
+    path = _planar2r_with_link2(tmp_path, mass=0.0, inertia="[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]", motor_inertia=0.0,
+                                rotor_mass=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        status = main(["export-fmu", str(path), "-o", str(tmp_path / "x.fmu")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2
+    assert len(err) == 1 and "link 2: the inertia matrix B(q) is singular" in err[0]
+
+
+def test_the_real_robots_pass_the_inertia_check():
+    from fmu.export_checks import check_inertia
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        for name in ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560"):
+            check_inertia(load_robot(name))

@@ -143,6 +143,11 @@ static int is_close(double a, double b) {
     return fabs(a - b) <= 1e-12 * (scale > 1.0 ? scale : 1.0);
 }
 
+/* Whether t is past the stopTime given to fmi2SetupExperiment (FMI 2.0, 2.1.6), rounding forgiven. */
+static int past_stop_time(const MwInstance *inst, double t) {
+    return inst->stop_time_defined && t > inst->stop_time && !is_close(t, inst->stop_time);
+}
+
 /* A non-finite computed value: logged, and the call returns fmi2Discard (the one policy). */
 static fmi2Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
     if (mw_all_finite(v, n)) return fmi2OK;
@@ -565,8 +570,14 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    char what[192];
     ENTER(CompletedIntegratorStep, FOR_ME, MODES_CompletedIntegratorStep);
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (past_stop_time(inst, inst->time)) {
+        snprintf(what, sizeof(what), "an integrator step completed at t = %.17g, past the stopTime %.17g of "
+                 "fmi2SetupExperiment", inst->time, inst->stop_time);
+        return fail(inst, "fmi2CompletedIntegratorStep", what);
+    }
     if (null_arg(inst, "fmi2CompletedIntegratorStep", "enterEventMode", enterEventMode) ||
         null_arg(inst, "fmi2CompletedIntegratorStep", "terminateSimulation", terminateSimulation))
         return fmi2Error;
@@ -579,7 +590,10 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     char what[192];
     ENTER(SetTime, FOR_ME, MODES_SetTime);
     if (!isfinite(time)) return fail(inst, "fmi2SetTime", "time is not finite");
-    if (inst->stop_time_defined && time > inst->stop_time && !is_close(time, inst->stop_time)) {
+    /* Past stopTime: an error in event mode. In continuous-time mode an integrator may try points past
+       it inside a step that it then interpolates back (CVode does); the step is refused only if it is
+       accepted there (fmi2CompletedIntegratorStep). */
+    if (inst->mode == MW_MODE_EVENT && past_stop_time(inst, time)) {
         snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g of fmi2SetupExperiment", time,
                  inst->stop_time);
         return fail(inst, "fmi2SetTime", what);
@@ -697,7 +711,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
         return fail(inst, fn, what);
     }
     next = currentCommunicationPoint + communicationStepSize;
-    if (inst->stop_time_defined && next > inst->stop_time && !is_close(next, inst->stop_time)) {
+    if (past_stop_time(inst, next)) {
         snprintf(what, sizeof(what), "a step from %.17g of %.17g s ends past the stopTime %.17g of fmi2SetupExperiment",
                  currentCommunicationPoint, communicationStepSize, inst->stop_time);
         return fail(inst, fn, what);
