@@ -143,30 +143,14 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
 
     check_inertia(robot)  # a singular B(q) is refused here, naming the joint, not at the importer's first call
     digest = robot.description.digest()
-    robot_ref = _robot_reference(robot.description)
     _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {motor_model} motors)")
     from model.plant import build_plant
 
+    from .robot_resource import description_to_json
+
     plant = build_plant(robot)
-    spec = spec_from_plant(plant, robot, step, robot_ref=robot_ref, robot_digest=digest)
+    spec = spec_from_plant(plant, robot, step, robot_digest=digest, robot_json=description_to_json(robot.description))
     return build_fmu(spec, path, progress=progress)
-
-
-def _robot_reference(description: Any) -> str:
-    """How validation and the master find the robot again: a TOML path, else the built-in name.
-
-    A TOML file other than the built-in one is recorded by its path. Anything else
-    (the built-in file, a dict, a ``dataclasses.replace`` of either) by its name,
-    which reloads the built-in robot: the FMU also records the description's digest,
-    and :func:`fmu.validate.reload_fmu_robot` refuses a reload whose digest differs
-    (a modified description that kept its name and path).
-    """
-    from model.description import BUILTIN_DIR
-
-    source = Path(description.path).resolve() if description.path else None
-    if source is not None and source != (BUILTIN_DIR / f"{description.name}.toml").resolve():
-        return str(source)
-    return description.name
 
 
 def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_inputs: int = 1,
@@ -193,6 +177,11 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         from . import __version__
 
         (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, __version__))
+        if spec.robot_json:
+            from .robot_resource import ROBOT_RESOURCE
+
+            (root / ROBOT_RESOURCE).parent.mkdir(parents=True, exist_ok=True)
+            (root / ROBOT_RESOURCE).write_text(spec.robot_json)
         _say(progress, f"writing {path}")
         tmp_fmu = Path(tmp) / path.name
         with zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:

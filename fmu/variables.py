@@ -119,9 +119,10 @@ class ModelSpec:
     output_state: tuple[int, ...]
     step: float
     stop_time: float = 3.0
-    robot: str = ""        # built-in name or TOML path, recorded for validation
+    robot: str = ""        # the robot's name, recorded in VendorAnnotations
     motor_model: str = ""
     robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
+    robot_json: str = ""    # the whole description (fmu.robot_resource), shipped as resources/robot.json
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
@@ -270,6 +271,10 @@ class VariableTable:
         attrs = f"name={quoteattr(spec.robot)} motorModel={quoteattr(spec.motor_model)}"
         if spec.robot_digest:
             attrs += f" digest={quoteattr(spec.robot_digest)}"
+        if spec.robot_json:
+            from .robot_resource import ROBOT_RESOURCE
+
+            attrs += f" description={quoteattr(ROBOT_RESOURCE)}"
         return attrs
 
     def _vendor_annotations(self) -> str:
@@ -444,16 +449,15 @@ def build_table(spec: ModelSpec) -> VariableTable:
 # ------------------------------------------------------------ specifications
 
 def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str | None = None,
-                    robot_ref: str | None = None, robot_digest: str = "") -> ModelSpec:
+                    robot_digest: str = "", robot_json: str = "") -> ModelSpec:
     """The :class:`ModelSpec` of a robot's plant (``model.plant.build_plant``).
 
     States ``q[i]`` and ``qd[i]`` (also outputs), inputs the motor torques
     ``tau_m[i]``, outputs the motor positions and the tool pose, parameters
-    the payload and friction (tunable) and gravity (fixed). ``robot_ref``
-    (default the robot's name) is how :func:`model.load_robot` finds the
-    robot again; it is recorded in the FMU's VendorAnnotations, with
+    the payload and friction (tunable) and gravity (fixed). The robot's name,
     ``robot_digest`` (the description's :meth:`~model.RobotDescription.digest`)
-    that a reload is checked against.
+    and, with ``robot_json`` (:func:`fmu.robot_resource.description_to_json`),
+    the whole description are recorded, so the FMU alone rebuilds the model.
     """
     n = int(plant.n)
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
@@ -524,9 +528,10 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
         params=params, p_start=np.asarray(plant.param_defaults, dtype=float), p_tunable=tunable, p_min=p_min,
         p_max=p_max, outputs=tuple(outputs), output_state=tuple(list(range(2 * n)) + [-1] * (n + 6)),
         step=float(step),
-        robot=robot_ref or robot.name,
+        robot=robot.name,
         motor_model=robot.motor_model,
         robot_digest=robot_digest,
+        robot_json=robot_json,
     )
 
 
