@@ -7,13 +7,16 @@ The FMU is made of
 * ``model_data.h`` / ``model_data.c`` and ``modelDescription.xml``, rendered
   from the one variable table of :mod:`fmu.variables`;
 * the FMI wrapper of ``fmu/c/``, written once and shared by every model;
-* the FMI 2.0 headers that ship with FMPy (included from FMPy's folder at
-  build time, copied only into the FMU's ``sources/``).
+* the standard FMI 2.0.1 headers (``fmu/c/fmi2/``, BSD-2 licence of the
+  Modelica Association, notice in each file), which honour
+  ``FMI2_FUNCTION_PREFIX``: a source FMU compiled with it links statically
+  next to other FMUs (the wrapper's internal functions take the prefix too).
 
 Generation, compiler discovery and flags are those of :mod:`model.codegen`
 (the one CasADi -> C -> compiler pipeline), plus hidden visibility, so the
 binary exports the ``fmi2`` functions only and needs nothing but libc and libm;
-the units are compiled in parallel.
+the units are compiled in parallel. No floating-point contraction
+(``-ffp-contract=off``: no fused multiply-add), so gcc and clang give the same numbers.
 """
 
 from __future__ import annotations
@@ -70,13 +73,11 @@ class FmuBuildError(RuntimeError):
 
 
 def fmi_headers_dir() -> Path:
-    """The folder of the FMI 2.0 C headers shipped inside the installed FMPy package."""
-    import fmpy
-
-    folder = Path(fmpy.__file__).resolve().parent / "c-code"
+    """The folder of the standard FMI 2.0.1 C headers (``fmu/c/fmi2``), shipped in every FMU's ``sources/``."""
+    folder = C_DIR / "fmi2"
     missing = [h for h in FMI_HEADERS if not (folder / h).is_file()]
     if missing:
-        raise FmuBuildError(f"FMI 2.0 headers: expected {missing} in {folder} (FMPy's c-code folder)")
+        raise FmuBuildError(f"FMI 2.0 headers: expected {missing} in {folder}")
     return folder
 
 
@@ -128,7 +129,8 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     Raises
     ------
     ValueError
-        Bad step or motor model, unknown robot.
+        Bad step or motor model, unknown robot; :class:`fmu.export_checks.SingularInertiaError`
+        (a ``RobotDescriptionError``) when ``B(q)`` is singular, naming the joint.
     FmuBuildError
         Not on Linux, or the generated C did not compile.
     """
@@ -141,31 +143,18 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
             robot = Robot(robot.description, motor_model=motor_model)
     else:
         robot = load_robot(robot_or_name, motor_model=motor_model)
+    from .export_checks import check_inertia
+
+    check_inertia(robot)  # a singular B(q) is refused here, naming the joint, not at the importer's first call
     digest = robot.description.digest()
-    robot_ref = _robot_reference(robot.description)
     _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {motor_model} motors)")
     from model.plant import build_plant
 
+    from .robot_resource import description_to_json
+
     plant = build_plant(robot)
-    spec = spec_from_plant(plant, robot, step, robot_ref=robot_ref, robot_digest=digest)
+    spec = spec_from_plant(plant, robot, step, robot_digest=digest, robot_json=description_to_json(robot.description))
     return build_fmu(spec, path, progress=progress)
-
-
-def _robot_reference(description: Any) -> str:
-    """How validation and the master find the robot again: a TOML path, else the built-in name.
-
-    A TOML file other than the built-in one is recorded by its path. Anything else
-    (the built-in file, a dict, a ``dataclasses.replace`` of either) by its name,
-    which reloads the built-in robot: the FMU also records the description's digest,
-    and :func:`fmu.validate.reload_fmu_robot` refuses a reload whose digest differs
-    (a modified description that kept its name and path).
-    """
-    from model.description import BUILTIN_DIR
-
-    source = Path(description.path).resolve() if description.path else None
-    if source is not None and source != (BUILTIN_DIR / f"{description.identifier}.toml").resolve():
-        return str(source)
-    return description.name
 
 
 def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_inputs: int = 1,
@@ -189,13 +178,14 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         _say(progress, f"compiling with {_compiler()} " + " ".join(CFLAGS))
         binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
         _compile(sources, c_files, binary, Path(tmp) / "obj")
-        # importers that rebuild from sources/ need the FMI headers next to the code
-        headers = fmi_headers_dir()
-        for name in FMI_HEADERS:
-            shutil.copyfile(headers / name, sources / name)
         from . import __version__
 
         (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, __version__))
+        if spec.robot_json:
+            from .robot_resource import ROBOT_RESOURCE
+
+            (root / ROBOT_RESOURCE).parent.mkdir(parents=True, exist_ok=True)
+            (root / ROBOT_RESOURCE).write_text(spec.robot_json)
         _say(progress, f"writing {path}")
         tmp_fmu = Path(tmp) / path.name
         with zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
@@ -211,8 +201,7 @@ def generate_sources(spec: ModelSpec, sources: Path, *, progress: Progress | Non
     """Write every C source and header of the FMU into ``sources``.
 
     Returns the variable table, the GUID and the names of the ``.c`` files.
-    The FMI headers are not copied here: the build includes them from FMPy's
-    folder, and :func:`build_fmu` adds copies to the FMU's ``sources/`` after.
+    The standard FMI headers are copied too: ``sources/`` compiles on its own.
     """
     fid = spec.model_identifier
     _say(progress, f"generating C with casadi.CodeGenerator ({spec.ode.n_instructions()} instructions in ode, "
@@ -224,6 +213,9 @@ def generate_sources(spec: ModelSpec, sources: Path, *, progress: Progress | Non
 
     for name in WRAPPER_SOURCES + WRAPPER_HEADERS:
         shutil.copyfile(C_DIR / name, sources / name)
+    headers = fmi_headers_dir()
+    for name in FMI_HEADERS:
+        shutil.copyfile(headers / name, sources / name)
 
     guid = _guid(spec, sources, table)
     (sources / "model_data.h").write_text(table.model_data_h(guid))
@@ -285,7 +277,7 @@ def _compiler() -> str:
 def _compile(sources: Path, c_files: list[str], binary: Path, obj_dir: Path) -> None:
     cc = _compiler()
     obj_dir.mkdir(parents=True, exist_ok=True)
-    include = [f"-I{sources}", f"-I{fmi_headers_dir()}"]
+    include = [f"-I{sources}"]  # the standard headers are copied into sources/
     units = [(sources / name, obj_dir / (Path(name).stem + ".o"),
               (*(CASADI_CFLAGS if name.endswith("_casadi.c") else CFLAGS), *include)) for name in c_files]
     compile_objects(cc, units, error=FmuBuildError)

@@ -31,6 +31,9 @@ import numpy as np
 __all__ = [
     "TOLERANCES",
     "ME_RTOL",
+    "DIVERGENCE_GAIN",
+    "Check",
+    "divergence_horizon",
     "TorqueProfile",
     "TrackingError",
     "RoundTrip",
@@ -50,16 +53,24 @@ __all__ = [
     "validate_fmu",
 ]
 
-#: Acceptance limits of :meth:`ValidationReport.problems` (rad or m for positions, rad/s or m/s for velocities).
+ME_RTOL = 1e-10
+#: The comparison horizon ends where the open-loop arm amplifies a perturbation of its state this much:
+#: beyond it a tolerance-sized difference grows into anything and a comparison says nothing.
+DIVERGENCE_GAIN = 1e3
+#: Acceptance limits, all relative: tracking errors are divided by the motion scale of the reference
+#: (largest joint excursion, largest joint speed, largest tool excursion over the horizon).
 TOLERANCES = {
-    "cs_q": 1e-9,        # RK4 at 1 ms against solve_ivp at rtol 1e-11 (seen: 3e-13)
-    "cs_qd": 1e-9,
-    "me_q": 1e-5,        # FMPy's CVode at rtol 1e-10 (seen: 5e-8 SCARA, 2e-6 Puma 560)
-    "me_qd": 1e-5,
-    "cosim": 1e-12,      # libcosim against FMPy: the same binary, the same arithmetic
+    # CVode's local error control at ME_RTOL: global errors of rtol x (up to ~1e3 steps and restarts at the
+    # input switches) x amplification (at most DIVERGENCE_GAIN over the horizon); seen 8e-6 on the Puma 560
+    "me": 1e3 * ME_RTOL * DIVERGENCE_GAIN,
+    # RK4 against the reference: at most this many times RK4's own error, estimated by a second run at
+    # half the internal step (Richardson: err(h) ~ 16/15 |x_h - x_h/2|) ...
+    "cs_richardson": 10.0,
+    # ... plus this floor: the reference's rtol 1e-11 amplified DIVERGENCE_GAIN times, x 10 (seen 7e-12, Puma)
+    "cs_floor": 10 * 1e-11 * DIVERGENCE_GAIN,
+    "cosim": 1e-12,      # libcosim against FMPy, relative to the state scale: the same binary, the same arithmetic
     "directional": 1e-6, # |AD - FD| / (1 + |FD|), central differences of relative step 1e-5 (seen: 7e-8)
 }
-ME_RTOL = 1e-10
 
 Progress = Callable[[str], None]
 
@@ -232,27 +243,33 @@ class RobotNotReloadableError(ValueError):
 
 
 def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
-    """The robot the FMU was built from, loaded again from its VendorAnnotations; None if none is recorded.
+    """The robot the FMU was built from, from the FMU alone; None if it records none.
 
-    The recorded name or TOML path is loaded and its description digest compared
-    with the recorded one (FMUs without a digest are taken as they are).
+    The description embedded as ``resources/robot.json`` is loaded (FMUs
+    exported before it was embedded: the built-in robot of the recorded name);
+    its digest must equal the one recorded in the VendorAnnotations.
 
     Raises
     ------
     RobotNotReloadableError
-        The digests differ: the FMU was built from a modified description (one that
-        kept the built-in name or the file path), or the TOML file changed since.
+        The digests differ (the resource was edited, or an older FMU of a
+        modified robot that kept a built-in name).
     model.RobotDescriptionError
-        The recorded TOML file no longer loads.
+        The embedded description does not load, or (older FMUs) the name is
+        not a built-in robot.
     """
     from model import Robot
     from model.description import load_description
+
+    from .robot_resource import read_robot_resource
 
     recorded = fmu_robot(fmu_path)
     if recorded is None:
         return None
     name, motor_model = recorded
-    description = load_description(name)
+    description = read_robot_resource(fmu_path)
+    if description is None:
+        description = load_description(name)
     digest = fmu_robot_digest(fmu_path)
     if digest is not None and description.digest() != digest:
         raise RobotNotReloadableError(
@@ -265,17 +282,36 @@ def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
 
 @dataclass(frozen=True)
 class TrackingError:
-    """Largest deviation of an FMU run from the reference over the horizon, per joint."""
+    """Largest deviation of an FMU run from the reference over the horizon, per joint, and the motion scales.
+
+    ``q``, ``qd`` (per joint) and ``tool_position`` are absolute; ``*_scale`` are the
+    largest joint excursion, joint speed and tool excursion of the reference, by
+    which :attr:`relative` divides them.
+    """
 
     label: str
     horizon: float
     q: np.ndarray
     qd: np.ndarray
     tool_position: float
+    q_scale: float = 1.0
+    qd_scale: float = 1.0
+    p_scale: float = 1.0
+
+    @property
+    def relative(self) -> dict[str, float]:
+        """Largest errors over the motion scales: keys ``q``, ``qd``, ``tool``."""
+        return {"q": float(self.q.max()) / self.q_scale, "qd": float(self.qd.max()) / self.qd_scale,
+                "tool": self.tool_position / self.p_scale}
 
     def line(self) -> str:
         return (f"{self.label:<28} max|q - q_ref| = {self.q.max():.3e}   max|qd - qd_ref| = {self.qd.max():.3e}   "
                 f"max|p_tool - p_ref| = {self.tool_position:.3e} m   (over {self.horizon:g} s)")
+
+
+def _scale(x: float) -> float:
+    """A motion scale, kept off zero for an arm that does not move (1e-9 of the unit)."""
+    return max(float(x), 1e-9)
 
 
 def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_ref: np.ndarray,
@@ -287,8 +323,48 @@ def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_re
     n = X.shape[1] // 2
     dX = np.abs(X[idx] - X_ref)
     dP = np.linalg.norm(P[idx] - P_ref, axis=1)
+    q_scale = _scale(np.max(np.abs(X_ref[:, :n] - X_ref[0, :n])))
+    qd_scale = _scale(np.max(np.abs(X_ref[:, n:])))
+    p_scale = _scale(np.max(np.linalg.norm(P_ref - P_ref[0], axis=1)))
     return TrackingError(label, float(t_ref[-1] - t_ref[0]), dX[:, :n].max(axis=0), dX[:, n:].max(axis=0),
-                         float(dP.max()))
+                         float(dP.max()), q_scale, qd_scale, p_scale)
+
+
+def divergence_horizon(plant: Any, profile: TorqueProfile, X_ref: np.ndarray, p: np.ndarray | None = None,
+                       delta: float = 1e-6) -> float:
+    """Time (s, a switching time of ``profile``) until which the open-loop arm amplifies a perturbation
+    of its initial velocities at most :data:`DIVERGENCE_GAIN` times.
+
+    The reference is integrated again from ``x0 + delta`` on every velocity (rad/s or m/s) and
+    compared with ``X_ref``; the horizon is the last switching time before the difference exceeds
+    ``DIVERGENCE_GAIN * delta`` (the whole profile if it never does).
+    """
+    n = X_ref.shape[1] // 2
+    x0 = X_ref[0].copy()
+    x0[n:] += delta
+    t, X = reference_response(plant, profile, p=p, x0=x0)
+    gain = np.max(np.abs(X - X_ref), axis=1) / delta
+    beyond = np.flatnonzero(gain > DIVERGENCE_GAIN)
+    return float(t[-1] if beyond.size == 0 else t[max(int(beyond[0]) - 1, 0)])
+
+
+@dataclass(frozen=True)
+class Check:
+    """One acceptance check: a figure, its bound and what the figure is."""
+
+    name: str
+    value: float
+    bound: float
+    what: str
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.value <= self.bound)   # NaN fails
+
+    def line(self) -> str:
+        verdict = "ok  " if self.passed else "FAIL"
+        relation = "<=" if self.passed else ">"
+        return f"{verdict} {self.name}: {self.what} = {self.value:.3e} {relation} bound {self.bound:.3e}"
 
 
 # ---------------------------------------------------------- low-level checks
@@ -519,7 +595,11 @@ def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7
 
 @dataclass
 class ValidationReport:
-    """Everything :func:`validate_fmu` found; :meth:`problems` lists what failed, :meth:`format` prints it."""
+    """Everything :func:`validate_fmu` found; :meth:`problems` lists what failed, :meth:`format` prints it.
+
+    Every numerical comparison is a :class:`Check` in ``checks`` (figure and bound);
+    :meth:`format` prints each one, passed or failed, so a failure names itself.
+    """
 
     fmu: str
     description_problems: list[str]
@@ -528,30 +608,20 @@ class ValidationReport:
     robot: tuple[str, str] | None = None
     profile: str = ""
     plan_drift: float = float("nan")
+    horizon: float | None = None       # the compared horizon, s (divergence_horizon)
     errors: list[TrackingError] = field(default_factory=list)
     roundtrip: RoundTrip | None = None
     directional: tuple[float, int] | None = None
     cosim_between_instances: float | None = None
     cosim_vs_fmpy: float | None = None
+    checks: list[Check] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     robot_skipped: str | None = None   # why the recorded robot was not reloaded (comparisons not run)
     cosim_skipped: str | None = None   # why the libcosim check was not run
 
     def problems(self) -> list[str]:
         found = list(self.description_problems) + list(self.binary_problems)
-        for e in self.errors:
-            kind = "cs" if e.label.startswith("Co-Simulation") else "me"
-            if e.q.max() > TOLERANCES[f"{kind}_q"] or e.qd.max() > TOLERANCES[f"{kind}_qd"]:
-                found.append(f"{e.label}: error above the tolerances {TOLERANCES[kind + '_q']:g} / "
-                             f"{TOLERANCES[kind + '_qd']:g}: {e.line()}")
-        if self.roundtrip is not None and not self.roundtrip.ok:
-            found.append(f"FMU state round trip not bit for bit: {self.roundtrip}")
-        if self.directional is not None and self.directional[0] > TOLERANCES["directional"]:
-            found.append(f"directional derivatives differ from finite differences by {self.directional[0]:.3e}")
-        for label, value in (("between libcosim instances", self.cosim_between_instances),
-                             ("libcosim vs FMPy", self.cosim_vs_fmpy)):
-            if value is not None and value > TOLERANCES["cosim"]:
-                found.append(f"{label}: largest difference {value:.3e}")
+        found += [c.line() for c in self.checks if not c.passed]
         return found
 
     @property
@@ -570,8 +640,12 @@ class ValidationReport:
             lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors): {self.robot_skipped}; "
                          "simulations against the Python model not run")
         elif self.robot is not None:
-            lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors); input: {self.profile}")
+            lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors, from the FMU's resources); "
+                         f"input: {self.profile}")
             lines += [f"  note: {note}" for note in self.notes]
+            if self.horizon is not None:
+                lines.append(f"  horizon {self.horizon:g} s: the open-loop arm amplifies a perturbation at most "
+                             f"{DIVERGENCE_GAIN:g} times up to there")
             lines.append(f"  open loop: the Python model leaves the planned path by {self.plan_drift:.3e} "
                          f"(max |q - q_plan|) over the horizon")
             for e in self.errors:
@@ -592,14 +666,33 @@ class ValidationReport:
                          f"against FMPy Co-Simulation {self.cosim_vs_fmpy:.3e}")
         if self.cosim_skipped is not None:
             lines.append(f"  libcosim: skipped ({self.cosim_skipped})")
+        if self.checks:
+            lines.append("  checks:")
+            lines += [f"    {c.line()}" for c in self.checks]
         found = self.problems()
         lines.append(f"  result: {'OK' if not found else f'{len(found)} problems'}")
+        lines += [f"    failed: {p}" for p in found]
         return "\n".join(lines)
 
 
+def _tracking_checks(e: TrackingError, kind: str, bound: float, basis: str) -> list[Check]:
+    rel = e.relative
+    return [
+        Check(f"{kind} q", rel["q"], bound, f"max|q - q_ref| / {e.q_scale:.3g} (largest joint excursion), {basis}"),
+        Check(f"{kind} qd", rel["qd"], bound, f"max|qd - qd_ref| / {e.qd_scale:.3g} (largest joint speed), {basis}"),
+        Check(f"{kind} tool", rel["tool"], bound,
+              f"max|p_tool - p_ref| / {e.p_scale:.3g} m (largest tool excursion), {basis}"),
+    ]
+
+
 def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: float = 1e-3,
-             with_cosim: bool = True, progress: Progress | None = None) -> ValidationReport:
-    """Run every check on an FMU (see the module docstring); ``t_end`` is the simulated horizon, s."""
+                 with_cosim: bool = True, progress: Progress | None = None) -> ValidationReport:
+    """Run every check on an FMU (see the module docstring).
+
+    ``t_end`` (s) is the longest horizon simulated; the comparisons with the Python
+    model end earlier where the open-loop arm diverges (:func:`divergence_horizon`).
+    Nothing but the FMU is needed: the robot comes from its ``resources/robot.json``.
+    """
     fmu_path = str(fmu_path)
     model_description_xml(fmu_path)  # ValueError naming the file if it is not an FMU
     _say(progress, "validating modelDescription.xml with FMPy")
@@ -636,8 +729,16 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     report.profile = profile.description
     _say(progress, "reference: the Python plant with solve_ivp (DOP853, rtol 1e-11)")
     t_ref, X_ref = reference_response(plant, profile, p=p_ref)
-    report.plan_drift = float(np.max(np.abs(X_ref[:, :n] - profile.q_plan)))
-    u_mid = np.vstack([profile.tau_m, profile.tau_m[-1]])
+    _say(progress, "divergence horizon: the reference again from a state perturbed by 1e-6")
+    horizon = divergence_horizon(plant, profile, X_ref, p=p_ref)
+    keep = t_ref <= horizon + 1e-12
+    if keep.sum() < 2:
+        keep[:2] = True
+        horizon = float(t_ref[1])
+    t_ref, X_ref = t_ref[keep], X_ref[keep]
+    report.horizon = horizon
+    report.plan_drift = float(np.max(np.abs(X_ref[:, :n] - profile.q_plan[keep])))
+    u_mid = np.vstack([profile.tau_m, profile.tau_m[-1]])[keep]
     P_ref = np.array([np.asarray(plant.out(x, u, p_ref)).reshape(-1)[3 * n:3 * n + 3]
                       for x, u in zip(X_ref, u_mid)])
 
@@ -645,20 +746,42 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     state_names = [f"q[{i}]" for i in range(1, n + 1)] + [f"qd[{i}]" for i in range(1, n + 1)]
     tool_names = [plant.output_names[3 * n + k] for k in range(3)]
     table = step_input(tau_names, profile.t_switch, profile.tau_m)
-    _say(progress, f"FMPy Co-Simulation, communication step {step:g} s")
-    cs = simulate_cs(fmu_path, t_end, step, inputs=table, outputs=state_names + tool_names, start_values=start)
-    report.errors.append(tracking_error(f"Co-Simulation (RK4, h={step:g})", cs.t, cs.stack(state_names),
-                                        cs.stack(tool_names), t_ref, X_ref, P_ref))
+    _say(progress, f"FMPy Co-Simulation over {horizon:g} s, communication step {step:g} s, and again at half "
+                   f"the internal step (RK4's own error)")
+    cs = simulate_cs(fmu_path, horizon, step, inputs=table, outputs=state_names + tool_names, start_values=start)
+    internal = _internal_step(fmu_path)
+    cs_half = simulate_cs(fmu_path, horizon, step, inputs=table, outputs=state_names + tool_names,
+                          start_values={**start, "internal_step": internal / 2})
+    cs_err = tracking_error(f"Co-Simulation (RK4, h={step:g})", cs.t, cs.stack(state_names),
+                            cs.stack(tool_names), t_ref, X_ref, P_ref)
+    rk4 = tracking_error("RK4 h vs h/2", cs.t, cs.stack(state_names), cs.stack(tool_names),
+                         cs_half.t, cs_half.stack(state_names), cs_half.stack(tool_names))
+    report.errors.append(cs_err)
+    rk4_rel = max(v for v in (16 / 15 * rk4.q.max() / cs_err.q_scale, 16 / 15 * rk4.qd.max() / cs_err.qd_scale,
+                              16 / 15 * rk4.tool_position / cs_err.p_scale))
+    cs_bound = TOLERANCES["cs_richardson"] * rk4_rel + TOLERANCES["cs_floor"]
+    report.checks += _tracking_checks(cs_err, "Co-Simulation", cs_bound,
+                                      f"bound {TOLERANCES['cs_richardson']:g} x RK4's error estimate "
+                                      f"{rk4_rel:.2e} + {TOLERANCES['cs_floor']:g}")
     _say(progress, f"FMPy Model Exchange with CVode, rtol {ME_RTOL:g}")
-    me = simulate_me(fmu_path, t_end, step, inputs=table, outputs=state_names + tool_names,
+    me = simulate_me(fmu_path, horizon, step, inputs=table, outputs=state_names + tool_names,
                      start_values=start, relative_tolerance=ME_RTOL)
-    report.errors.append(tracking_error(f"Model Exchange (CVode {ME_RTOL:g})", me.t, me.stack(state_names),
-                                        me.stack(tool_names), t_ref, X_ref, P_ref))
+    me_err = tracking_error(f"Model Exchange (CVode {ME_RTOL:g})", me.t, me.stack(state_names),
+                            me.stack(tool_names), t_ref, X_ref, P_ref)
+    report.errors.append(me_err)
+    report.checks += _tracking_checks(me_err, "Model Exchange", TOLERANCES["me"],
+                                      f"bound 1e3 x rtol {ME_RTOL:g} x gain {DIVERGENCE_GAIN:g}")
 
     _say(progress, "FMU state get/set and serialisation round trips")
     report.roundtrip = state_roundtrip(fmu_path, profile.at, tau_names, state_names + tool_names, step=step)
+    r = report.roundtrip
+    report.checks.append(Check("FMU state round trips", float(3 - sum((r.get_set_identical, r.deserialized_identical,
+                                                                        r.me_identical))), 0.0,
+                               "continuations that differ from the original run, bit for bit (of 3)"))
     _say(progress, "directional derivatives against finite differences")
     report.directional = directional_derivative_error(fmu_path)
+    report.checks.append(Check("directional derivatives", report.directional[0], TOLERANCES["directional"],
+                               f"max |AD - FD| / (1 + |FD|) over {report.directional[1]} entries"))
 
     if with_cosim:
         from .cosim import libcosim_unavailable, run_libcosim
@@ -666,11 +789,24 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
         report.cosim_skipped = libcosim_unavailable()
     if with_cosim and report.cosim_skipped is None:
         _say(progress, "libcosim: two instances side by side")
-        res = run_libcosim(fmu_path, stop_time=t_end, step=step, inputs=profile.at, input_names=tau_names,
+        res = run_libcosim(fmu_path, stop_time=horizon, step=step, inputs=profile.at, input_names=tau_names,
                            output_names=state_names + tool_names, start_values=start)
         a, b = (res.values[k] for k in res.values)
         report.cosim_between_instances = float(np.max(np.abs(a - b)))
         fm = cs.stack(state_names + tool_names)
         idx = [int(round(tk / step)) for tk in res.t]
         report.cosim_vs_fmpy = float(np.max(np.abs(a - fm[idx])))
+        scale = max(1.0, float(np.max(np.abs(fm))))
+        report.checks.append(Check("libcosim instances", report.cosim_between_instances / scale, TOLERANCES["cosim"],
+                                   f"max difference between two libcosim instances / {scale:.3g}"))
+        report.checks.append(Check("libcosim vs FMPy", report.cosim_vs_fmpy / scale, TOLERANCES["cosim"],
+                                   f"max difference between libcosim and FMPy Co-Simulation / {scale:.3g}"))
     return report
+
+
+def _internal_step(fmu_path: str) -> float:
+    """The start value of the FMU's ``internal_step``, s."""
+    from fmpy import read_model_description
+
+    md = read_model_description(fmu_path)
+    return float(next(v.start for v in md.modelVariables if v.name == "internal_step"))

@@ -32,6 +32,9 @@ import numpy as np
 __all__ = [
     "TEMPLATE_DIR",
     "MIN_STEP",
+    "MAX_SUBSTEPS",
+    "SUBSTEP_RTOL",
+    "substeps",
     "Quantity",
     "ModelSpec",
     "Variable",
@@ -48,10 +51,30 @@ __all__ = [
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 STEP_NAME = "internal_step"
 #: Smallest internal step, s: the check of :class:`ModelSpec` and the ``min`` of ``internal_step`` in the XML.
-MIN_STEP = 1e-9
+#: With at most :data:`MAX_SUBSTEPS` sub-steps per ``fmi2DoStep`` it bounds the work of one call.
+MIN_STEP = 1e-6
+#: Most RK4 sub-steps of one ``fmi2DoStep`` (``MW_MAX_SUBSTEPS`` of ``fmu/c/instance.h``); more is an fmi2Error.
+MAX_SUBSTEPS = 1_000_000
+#: Relative noise of ``h / internal_step`` forgiven when counting sub-steps (``MW_SUBSTEP_RTOL``).
+SUBSTEP_RTOL = 1e-8
 
 # Names of the FMI variables that the table itself chooses.
 _STRUCTURED = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?)*")
+
+
+def substeps(h: float, internal_step: float) -> int:
+    """RK4 sub-steps of a communication step ``h`` (s), as ``mw_substeps`` of ``fmu/c/instance.c`` counts them.
+
+    ``ceil(h / internal_step)``, except that a ratio within a relative
+    :data:`SUBSTEP_RTOL` of an integer k gives k; 0 above :data:`MAX_SUBSTEPS`.
+    """
+    ratio = h / internal_step
+    if not (ratio > 0 and math.isfinite(ratio)):
+        return 0
+    nearest = math.floor(ratio + 0.5)
+    n = nearest if abs(ratio - nearest) <= SUBSTEP_RTOL * ratio else math.ceil(ratio)
+    n = max(n, 1)
+    return n if n <= MAX_SUBSTEPS else 0
 
 
 def is_structured_name(name: str) -> bool:
@@ -96,9 +119,10 @@ class ModelSpec:
     output_state: tuple[int, ...]
     step: float
     stop_time: float = 3.0
-    robot: str = ""        # built-in name or TOML path, recorded for validation
+    robot: str = ""        # the robot's name, recorded in VendorAnnotations
     motor_model: str = ""
     robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
+    robot_json: str = ""    # the whole description (fmu.robot_resource), shipped as resources/robot.json
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
@@ -146,7 +170,7 @@ class Variable:
     start: float | None
     unit: str
     description: str
-    settable: str        # never, initial, tunable, input (see fmu/c/model.h)
+    settable: str        # never, initial, tunable, input, state (see fmu/c/model.h)
     min: float | None = None
     max: float | None = None
     derivative_of: int | None = None  # vr of the state this is the derivative of
@@ -224,7 +248,7 @@ class VariableTable:
         kinds = {"state": "MW_KIND_STATE", "derivative": "MW_KIND_DERIVATIVE", "input": "MW_KIND_INPUT",
                  "parameter": "MW_KIND_PARAMETER", "output": "MW_KIND_OUTPUT", "step": "MW_KIND_STEP"}
         settable = {"never": "MW_SET_NEVER", "initial": "MW_SET_INITIAL", "tunable": "MW_SET_TUNABLE",
-                    "input": "MW_SET_INPUT"}
+                    "input": "MW_SET_INPUT", "state": "MW_SET_STATE"}
         rows = []
         for v in self.variables:
             lo = "-HUGE_VAL" if v.min is None else _c_number(v.min)
@@ -247,6 +271,10 @@ class VariableTable:
         attrs = f"name={quoteattr(spec.robot)} motorModel={quoteattr(spec.motor_model)}"
         if spec.robot_digest:
             attrs += f" digest={quoteattr(spec.robot_digest)}"
+        if spec.robot_json:
+            from .robot_resource import ROBOT_RESOURCE
+
+            attrs += f" description={quoteattr(ROBOT_RESOURCE)}"
         return attrs
 
     def _vendor_annotations(self) -> str:
@@ -355,7 +383,7 @@ def build_table(spec: ModelSpec) -> VariableTable:
 
     states = [add(name=q.name, kind="state", index=i, causality="output" if i in state_is_output else "local",
                   variability="continuous", initial="exact", start=float(spec.x_start[i]), unit=q.unit,
-                  description=q.description, settable="initial")
+                  description=q.description, settable="state")
               for i, q in enumerate(spec.states)]
     derivs = [add(name=f"der({q.name})", kind="derivative", index=i, causality="local", variability="continuous",
                   initial="calculated", start=None, unit=derivative_unit(q.unit),
@@ -375,7 +403,8 @@ def build_table(spec: ModelSpec) -> VariableTable:
     add(name=STEP_NAME, kind="step", index=0, causality="parameter", variability="fixed", initial="exact",
         start=float(spec.step), unit="s", min=MIN_STEP, settable="initial",
         description="step of the co-simulation integrator (classical RK4): a communication step h "
-                    "takes ceil(h / internal_step) equal sub-steps")
+                    "takes ceil(h / internal_step) equal sub-steps (k if h / internal_step is within a "
+                    f"relative {SUBSTEP_RTOL:g} of an integer k), at most {MAX_SUBSTEPS} per fmi2DoStep")
 
     names = [v.name for v in variables]
     duplicates = sorted({n for n in names if names.count(n) > 1})
@@ -420,16 +449,15 @@ def build_table(spec: ModelSpec) -> VariableTable:
 # ------------------------------------------------------------ specifications
 
 def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str | None = None,
-                    robot_ref: str | None = None, robot_digest: str = "") -> ModelSpec:
+                    robot_digest: str = "", robot_json: str = "") -> ModelSpec:
     """The :class:`ModelSpec` of a robot's plant (``model.plant.build_plant``).
 
     States ``q[i]`` and ``qd[i]`` (also outputs), inputs the motor torques
     ``tau_m[i]``, outputs the motor positions and the tool pose, parameters
-    the payload and friction (tunable) and gravity (fixed). ``robot_ref``
-    (default the robot's name) is how :func:`model.load_robot` finds the
-    robot again; it is recorded in the FMU's VendorAnnotations, with
+    the payload and friction (tunable) and gravity (fixed). The robot's name,
     ``robot_digest`` (the description's :meth:`~model.RobotDescription.digest`)
-    that a reload is checked against.
+    and, with ``robot_json`` (:func:`fmu.robot_resource.description_to_json`),
+    the whole description are recorded, so the FMU alone rebuilds the model.
     """
     n = int(plant.n)
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
@@ -500,9 +528,10 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
         params=params, p_start=np.asarray(plant.param_defaults, dtype=float), p_tunable=tunable, p_min=p_min,
         p_max=p_max, outputs=tuple(outputs), output_state=tuple(list(range(2 * n)) + [-1] * (n + 6)),
         step=float(step),
-        robot=robot_ref or robot.name,
+        robot=robot.name,
         motor_model=robot.motor_model,
         robot_digest=robot_digest,
+        robot_json=robot_json,
     )
 
 

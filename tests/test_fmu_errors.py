@@ -6,7 +6,8 @@ with a logger that records every message; one test per bad-call case.
 
 from __future__ import annotations
 
-from ctypes import byref, c_double, c_int, c_size_t, c_void_p, create_string_buffer
+from ctypes import addressof as ctypes_address
+from ctypes import byref, c_char, c_double, c_int, c_size_t, c_void_p, create_string_buffer
 
 import numpy as np
 import pytest
@@ -131,15 +132,6 @@ def test_null_component_is_an_error_not_a_crash():
         assert h.fmu.dll.fmi2DoStep(None, c_double(0.0), c_double(1e-3), c_int(1)) == fmi2Error
         assert h.fmu.dll.fmi2GetReal(None, None, c_size_t(0), None) == fmi2Error
         h.fmu.dll.fmi2FreeInstance(None)
-    finally:
-        h.close()
-
-
-def test_a_foreign_pointer_is_not_taken_for_an_instance():
-    h = Harness("cs")
-    try:
-        junk = create_string_buffer(512)
-        assert h.fmu.dll.fmi2Terminate(junk) == fmi2Error
     finally:
         h.close()
 
@@ -270,7 +262,7 @@ def test_internal_step_after_initialisation(cs):
 
 def test_state_start_value_after_initialisation(cs):
     assert status_of(cs.fmu.setReal, cs.vr("q[1]"), [0.3]) == fmi2Error
-    assert_logged(cs, fmi2Error, "logStatusError", "variable q[1] is fixed")
+    assert_logged(cs, fmi2Error, "logStatusError", "variable q[1] is a continuous state", '"step complete"')
 
 
 def test_tunable_parameter_in_continuous_time_mode(me):
@@ -288,6 +280,92 @@ def test_tunable_parameter_between_steps_is_accepted(cs):
 
 
 # ------------------------------------------------------------------ stepping
+
+def _with_stop_time(kind: str, stop_time: float) -> Harness:
+    h = Harness(kind).start(initialise=False)
+    h.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
+    h.fmu.enterInitializationMode()
+    h.fmu.exitInitializationMode()
+    return h
+
+
+def test_a_step_past_the_stop_time_is_an_error():
+    """FMI 2.0 (2.1.6): with stopTimeDefined, computing past stopTime has to be an error."""
+    h = _with_stop_time("cs", 0.01)
+    try:
+        for k in range(9):                                   # t = k h, h = 1 ms: up to 0.009
+            h.fmu.doStep(k * 1e-3, 1e-3)
+        assert status_of(h.fmu.doStep, 9e-3, 1e-3) == fmi2OK  # 0.009 + 0.001 rounds just off 0.01: still accepted
+        assert status_of(h.fmu.doStep, 0.01, 1e-3) == fmi2Error
+        assert_logged(h, fmi2Error, "logStatusError", "fmi2DoStep: a step from 0.01 of 0.001 s ends past the stopTime 0.01 ")
+    finally:
+        h.close()
+
+
+def test_model_exchange_past_the_stop_time_is_an_error():
+    """An accepted integrator step, or event mode, past stopTime is an error; a trial point inside a step is not
+    (CVode evaluates past its output point and interpolates back)."""
+    h = _with_stop_time("me", 1.0)
+    try:
+        h.fmu.enterContinuousTimeMode()
+        assert status_of(h.fmu.setTime, 1.001) == fmi2OK       # a trial point of the integrator
+        assert status_of(h.fmu.setTime, 1.0) == fmi2OK
+        assert h.fmu.completedIntegratorStep() == (False, False)
+        h.fmu.setTime(1.001)
+        assert status_of(h.fmu.completedIntegratorStep) == fmi2Error
+        assert_logged(h, fmi2Error, "logStatusError", "fmi2CompletedIntegratorStep: an integrator step completed at "
+                      "t = 1.0009999999999999, past the stopTime 1 ")
+    finally:
+        h.close()
+    h = _with_stop_time("me", 1.0)
+    try:
+        assert status_of(h.fmu.setTime, 1.001) == fmi2Error     # event mode
+        assert_logged(h, fmi2Error, "logStatusError", "fmi2SetTime: time 1.0009999999999999 is past the stopTime 1 ")
+    finally:
+        h.close()
+
+
+def test_one_do_step_takes_at_most_a_million_sub_steps(cs_fresh):
+    """internal_step >= 1e-6 s and <= 1e6 sub-steps per call bound the work of one fmi2DoStep."""
+    cs = cs_fresh
+    assert status_of(cs.fmu.setReal, cs.vr("internal_step"), [1e-7]) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError", "internal_step: value 9.9999999999999995e-08 is outside [1e-06, inf]")
+    cs.fmu.reset()
+    cs.fmu.setReal(cs.vr("internal_step"), [1e-6])
+    cs.fmu.setupExperiment(startTime=0.0)
+    cs.fmu.enterInitializationMode()
+    cs.fmu.exitInitializationMode()
+    assert status_of(cs.fmu.doStep, 0.0, 1.0) == fmi2OK          # 1e6 sub-steps: the most one call takes
+    assert status_of(cs.fmu.doStep, 1.0, 1.5) == fmi2Error
+    assert_logged(cs, fmi2Error, "logStatusError",
+                  "fmi2DoStep: communicationStepSize 1.5 needs more than 1000000 sub-steps of internal_step 1e-06 s")
+
+
+def _substep_counts(cs: Harness, steps: list[float]) -> list[int]:
+    import re
+
+    cs.fmu.setDebugLogging(True, ["logCalls"])
+    t = 0.0
+    for h in steps:
+        cs.fmu.doStep(t, h)
+        t += h
+    found = [re.search(r"fmi2DoStep: from t = \S+, (\d+) sub-steps", m) for _, _, m in cs.log.messages]
+    return [int(f.group(1)) for f in found if f is not None]
+
+
+def test_the_sub_step_count_ignores_rounding_noise_in_the_step(cs):
+    """h (1 +- 1e-10) takes as many sub-steps as h; noise used to turn 1 sub-step into 2 (and 2 into 3)."""
+    from fmu.variables import substeps
+
+    counts = _substep_counts(cs, [1e-3 * (1 + 1e-10), 1e-3 * (1 - 1e-10), 2e-3 * (1 + 1e-10), 2e-3 * (1 - 1e-10),
+                                  2.5e-3, 1e-3 * (1 + 1e-6)])
+    assert counts == [1, 1, 2, 2, 3, 2]
+    # the Python twin counts as the C wrapper does
+    assert [substeps(h, 1e-3) for h in (1e-3 * (1 + 1e-10), 1e-3 * (1 - 1e-10), 2.5e-3, 1e-3 * (1 + 1e-6))] == \
+        [1, 1, 3, 2]
+    assert substeps(2.0, 1e-6) == 0
+
+
 
 def test_zero_communication_step(cs):
     assert status_of(cs.fmu.doStep, 0.0, 0.0) == fmi2Error
@@ -405,12 +483,39 @@ def test_set_a_null_fmu_state(cs):
 def test_set_a_foreign_fmu_state(cs):
     junk = create_string_buffer(256)
     assert status_of(cs.fmu.fmi2SetFMUstate, cs.c, junk) == fmi2Error
-    assert_logged(cs, fmi2Error, "logStatusError", "not an FMU state of this model")
+    assert_logged(cs, fmi2Error, "logStatusError", "not an FMU state of this instance")
 
 
 def test_free_fmu_state_with_a_null_pointer(cs):
     assert status_of(cs.fmu.fmi2FreeFMUstate, cs.c, None) == fmi2Error
     assert_logged(cs, fmi2Error, "logStatusError", "fmi2FreeFMUstate: argument FMUstate is NULL")
+
+
+def test_deserialise_ignores_the_incoming_value_of_the_out_pointer(cs):
+    """*FMUstate is an output of fmi2DeSerializeFMUstate: a stale value in it is neither read nor reused."""
+    state = cs.fmu.getFMUstate()
+    data = cs.fmu.serializeFMUstate(state)
+    junk = create_string_buffer(b"\xff" * 256)
+    out = fmi2FMUstate(ctypes_address(junk))
+    buffer = (c_char * len(data)).from_buffer_copy(data)
+    assert status_of(cs.fmu.fmi2DeSerializeFMUstate, cs.c, buffer, len(data), byref(out)) == fmi2OK
+    assert out.value != ctypes_address(junk)
+    assert junk.raw[:256] == b"\xff" * 256
+    assert status_of(cs.fmu.fmi2SetFMUstate, cs.c, out) == fmi2OK
+    cs.fmu.freeFMUstate(out)
+    cs.fmu.freeFMUstate(state)
+
+
+def test_a_null_logger_is_refused_with_a_line_on_stderr(capfd):
+    h = Harness("cs")
+    try:
+        callbacks = make_callbacks(LogRecorder())
+        callbacks.logger = type(callbacks.logger)()              # a NULL function pointer
+        assert _instantiate(h, h.md.guid.encode(), callbacks, name=b"nolog") is None
+        err = capfd.readouterr().err
+        assert "fmi2Instantiate(nolog): refused: functions->logger is NULL" in err
+    finally:
+        h.close()
 
 
 def test_free_of_an_empty_fmu_state_is_a_no_op(cs):
@@ -450,7 +555,37 @@ def test_non_finite_derivatives_are_a_discard(me):
     me.fmu.setReal(me.vr("tau_m[2]"), [1e308])
     dx = (fmi2Real * 8)()
     assert status_of(me.fmu.fmi2GetDerivatives, me.c, dx, 8) == fmi2Discard
-    assert_logged(me, fmi2Discard, "logStatusDiscard", "fmi2GetDerivatives: the derivatives at t = 0 are not finite")
+    assert_logged(me, fmi2Discard, "logStatusDiscard",
+                  "fmi2GetDerivatives: the derivatives at t = 0 are not all finite")
+
+
+def test_non_finite_values_from_get_real_are_a_discard_too(me):
+    """One policy for non-finite computed values: fmi2GetReal as fmi2GetDerivatives."""
+    me.fmu.setReal(me.vr("tau_m[2]"), [1e308])
+    vr = (fmi2ValueReference * 1)(*me.vr("der(qd[2])"))
+    value = (fmi2Real * 1)()
+    assert status_of(me.fmu.fmi2GetReal, me.c, vr, 1, value) == fmi2Discard
+    assert not np.isfinite(value[0])
+    assert_logged(me, fmi2Discard, "logStatusDiscard", "fmi2GetReal: the values at t = 0 are not all finite")
+
+
+def test_a_state_can_be_set_in_continuous_time_mode(me):
+    """FMI 2.0.1 allows fmi2SetReal on a continuous state in Continuous-Time Mode (and in Event Mode)."""
+    before = me.fmu.getReal(me.vr("der(q[1])"))[0]
+    assert status_of(me.fmu.setReal, me.vr("qd[1]"), [0.25]) == fmi2OK
+    assert me.fmu.getReal(me.vr("qd[1]", "der(q[1])")) == [0.25, 0.25]     # der(q) = qd: the cache was refreshed
+    assert before == 0.0
+    me.fmu.enterEventMode()
+    assert status_of(me.fmu.setReal, me.vr("q[2]"), [0.1]) == fmi2OK
+    assert me.fmu.getReal(me.vr("q[2]")) == [0.1]
+
+
+def test_set_time_may_not_go_back_in_event_mode(me):
+    me.fmu.setTime(0.5)
+    me.fmu.enterEventMode()
+    assert status_of(me.fmu.setTime, 0.5) == fmi2OK
+    assert status_of(me.fmu.setTime, 0.25) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2SetTime: time 0.25 is before the current time 0.5")
 
 
 def test_directional_derivative_with_an_output_as_known(me):

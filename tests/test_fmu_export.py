@@ -111,12 +111,12 @@ def test_spec_rejects_bad_input():
 def test_spec_rejects_a_step_below_the_minimum_declared_in_the_xml():
     from fmu.variables import MIN_STEP
 
-    with pytest.raises(ValueError, match=r"step: expected an internal step of at least 1e-09 s "
-                                         r"\(the min of internal_step\), got 1e-10"):
-        trivial_spec(1e-10)
+    with pytest.raises(ValueError, match=r"step: expected an internal step of at least 1e-06 s "
+                                         r"\(the min of internal_step\), got 1e-07"):
+        trivial_spec(1e-7)
     table = build_table(trivial_spec(MIN_STEP))
     step = next(v for v in table.variables if v.name == "internal_step")
-    assert step.min == MIN_STEP == 1e-9 and step.start == MIN_STEP
+    assert step.min == MIN_STEP == 1e-6 and step.start == MIN_STEP
     root = ET.fromstring(table.model_description("{guid}", [], "0"))
     xml = next(v for v in root.find("ModelVariables") if v.get("name") == "internal_step")
     assert float(xml.find("Real").get("min")) == MIN_STEP
@@ -154,7 +154,7 @@ def test_binary_exports_only_fmi2_and_needs_only_libc_and_libm():
     assert set(facts["needed"]) <= {"libc.so.6", "libm.so.6"}
 
 
-def test_generated_files_are_stamped_and_headers_come_from_fmpy():
+def test_generated_files_are_stamped_and_the_standard_headers_are_shipped():
     with zipfile.ZipFile(scara_fmu()) as zf:
         names = set(zf.namelist())
         for generated in ("sources/model_data.c", "sources/model_data.h", "sources/scara_casadi.c",
@@ -163,7 +163,11 @@ def test_generated_files_are_stamped_and_headers_come_from_fmpy():
         header = zf.read("sources/model_data.h").decode()
     assert {f"sources/{h}" for h in FMI_HEADERS} <= names
     assert "binaries/linux64/scara.so" in names
-    assert not any((C_DIR / h).exists() for h in FMI_HEADERS)   # no copies in the repository
+    # the standard headers, which honour FMI2_FUNCTION_PREFIX (FMPy's copies drop the prefix), licence kept
+    with zipfile.ZipFile(scara_fmu()) as zf:
+        functions_h = zf.read("sources/fmi2Functions.h").decode()
+    assert "#define fmi2FullName(name) fmi2PasteB(FMI2_FUNCTION_PREFIX, name)" in functions_h
+    assert "2-Clause BSD License" in functions_h
     assert "#define MW_VR_tau_m_1 16u /* tau_m[1] */" in header
 
 
@@ -233,8 +237,8 @@ def test_cli_export_fmu_rejects_a_bad_step(capsys):
         main(["export-fmu", "scara", "-o", "x.fmu", "--step", "-1"])
     assert "expected a positive finite step in s, got '-1'" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        main(["export-fmu", "scara", "-o", "x.fmu", "--step", "1e-10"])
-    assert "expected an internal step of at least 1e-09 s, got '1e-10'" in capsys.readouterr().err
+        main(["export-fmu", "scara", "-o", "x.fmu", "--step", "1e-7"])
+    assert "expected an internal step of at least 1e-06 s, got '1e-7'" in capsys.readouterr().err
 
 
 def test_export_leaves_the_working_directory_alone(tmp_path, monkeypatch):
@@ -293,3 +297,66 @@ def test_wrapper_compiles_cleanly_with_pedantic_warnings(tmp_path):
                                "-Wstrict-prototypes", "-Werror", f"-I{C_DIR}", f"-I{fmi_headers_dir()}", "-c",
                                str(C_DIR / name), "-o", str(tmp_path / "x.o")], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
+
+
+# ------------------------------------------------------- refused at export time
+
+def _planar2r_with_link2(tmp_path, **link2) -> Path:
+    """planar2r.toml with link 2's fields replaced (written to a file, so errors name it)."""
+    from model.description import BUILTIN_DIR
+
+    text = (BUILTIN_DIR / "planar2r.toml").read_text()
+    head, first, second = text.split("[[links]]")
+    for key, value in link2.items():
+        second = re.sub(rf"(?m)^{key} = .*$", f"{key} = {value}", second)
+    path = tmp_path / "planar2r_mod.toml"
+    path.write_text(head + "[[links]]" + first + "[[links]]" + second)
+    return path
+
+
+@pytest.mark.parametrize("link2", [
+    # massless link 2 without motor inertia: B's row and column 2 are zero
+    {"mass": 0.0, "inertia": "[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]", "motor_inertia": 0.0, "rotor_mass": 0.0},
+    # mass on the joint 2 axis, no inertia about it, no motor: joint 2 moves nothing
+    {"com": "[-1.0, 0.0, 0.0]", "inertia": "[0.1, 10.0, 0.0, 0.0, 0.0, 0.0]", "motor_inertia": 0.0},
+])
+def test_a_robot_with_a_singular_inertia_matrix_is_refused_at_export(tmp_path, link2):
+    """A singular B(q) would make the FMU's derivatives non-finite: refused, one line naming the joint."""
+    from fmu.export_checks import SingularInertiaError, check_inertia
+
+    path = _planar2r_with_link2(tmp_path, **link2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        robot = load_robot(str(path))
+        # the reference: B(q) itself is singular, and joint 2's diagonal entry is (numerically) zero
+        B = robot.inertia(robot.q_rest)
+        assert abs(B[1, 1]) < 1e-12 * np.abs(B).max()
+        message = rf"^{re.escape(str(path))}, link 2: the inertia matrix B\(q\) is singular .*joint 2 moves no mass"
+        with pytest.raises(SingularInertiaError, match=message):
+            check_inertia(robot)
+        with pytest.raises(SingularInertiaError, match=message):
+            fmu.export_fmu(robot, tmp_path / "singular.fmu")
+    assert not (tmp_path / "singular.fmu").exists()
+    assert isinstance(SingularInertiaError("x"), ValueError)
+
+
+def test_cli_export_of_a_singular_robot_exits_2_with_one_line(tmp_path, capsys):
+    from workbench.cli import main
+
+    path = _planar2r_with_link2(tmp_path, mass=0.0, inertia="[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]", motor_inertia=0.0,
+                                rotor_mass=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        status = main(["export-fmu", str(path), "-o", str(tmp_path / "x.fmu")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2
+    assert len(err) == 1 and "link 2: the inertia matrix B(q) is singular" in err[0]
+
+
+def test_the_real_robots_pass_the_inertia_check():
+    from fmu.export_checks import check_inertia
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        for name in ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560"):
+            check_inertia(load_robot(name))

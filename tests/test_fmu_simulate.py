@@ -57,7 +57,8 @@ def test_co_simulation_matches_python_model(scenario):
     cs = simulate_cs(scara_fmu(), 3.0, 1e-3, inputs=table, outputs=STATES + TOOL)
     err = tracking_error("Co-Simulation", cs.t, cs.stack(STATES), cs.stack(TOOL), t_ref, X_ref, P_ref)
     print(err.line())
-    assert err.q.max() < TOLERANCES["cs_q"] and err.qd.max() < TOLERANCES["cs_qd"]
+    # RK4 at 1 ms on the SCARA's slow feed-forward: its own error is ~1e-13 (seen 3e-13 against the reference)
+    assert err.q.max() < 1e-9 and err.qd.max() < 1e-9
     assert err.tool_position < 1e-9
 
 
@@ -67,7 +68,7 @@ def test_model_exchange_cvode_matches_python_model(scenario):
     me = simulate_me(scara_fmu(), 3.0, 1e-3, inputs=table, outputs=STATES + TOOL, relative_tolerance=ME_RTOL)
     err = tracking_error("Model Exchange", me.t, me.stack(STATES), me.stack(TOOL), t_ref, X_ref, P_ref)
     print(err.line())
-    assert err.q.max() < TOLERANCES["me_q"] and err.qd.max() < TOLERANCES["me_qd"]
+    assert max(err.relative.values()) < TOLERANCES["me"]
 
 
 def test_variable_communication_step_takes_equal_substeps(scenario):
@@ -170,11 +171,15 @@ def test_validate_flags_a_wrong_model(scenario, monkeypatch):
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
         report = validate_fmu(scara_fmu(), with_cosim=False)
     assert not report.ok
-    assert any("error above the tolerances" in p for p in report.problems())
+    failed = {c.name for c in report.checks if not c.passed}
+    assert {"Co-Simulation q", "Model Exchange q"} <= failed
+    text = report.format()
+    # every failed check is named on the console with its figure and its bound
+    assert "FAIL Co-Simulation q: max|q - q_ref| / " in text and "> bound " in text
 
 
 def test_validate_a_robot_from_a_file_with_coulomb_friction(tmp_path):
-    """A TOML robot (recorded by path) with Coulomb friction: the comparison runs without it, and passes."""
+    """A TOML robot with Coulomb friction, validated from the FMU alone: the comparison runs without it, and passes."""
     from fmu import export_fmu
     from fmu.validate import fmu_robot
     from model.description import BUILTIN_DIR
@@ -184,7 +189,8 @@ def test_validate_a_robot_from_a_file_with_coulomb_friction(tmp_path):
     toml = tmp_path / "planar2r_coulomb.toml"
     toml.write_text(text)
     path = export_fmu(str(toml), tmp_path / "planar2r_coulomb.fmu")
-    assert fmu_robot(path) == (str(toml.resolve()), "reflected")
+    assert fmu_robot(path) == ("planar2r_coulomb", "reflected")
+    toml.unlink()                                       # validation needs nothing but the FMU
     report = validate_fmu(path, t_end=1.0)
     print(report.format())
     assert report.ok, report.problems()
@@ -224,13 +230,18 @@ def test_validate_fmu_command_names_a_file_that_is_not_an_fmu(tmp_path, capsys):
     assert err.count("\n") == 1 and f"not an FMU: {empty} has no modelDescription.xml" in err
 
 
-def test_validate_does_not_compare_a_modified_robot_with_the_built_in_one():
-    """An FMU of a mass-scaled SCARA records the name scara; validation must not reload the built-in SCARA."""
+def test_validate_compares_a_modified_robot_with_its_own_description():
+    """An FMU of a mass-scaled SCARA keeps the name scara; its embedded description, not the built-in SCARA,
+    is the reference (the built-in one would miss by the 1.5x masses)."""
+    from fmu.validate import reload_fmu_robot
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
-        report = validate_fmu(heavy_scara_fmu(), with_cosim=False)
-    text = report.format()
-    print(text)
-    assert report.errors == [] and report.roundtrip is None
-    assert "robot not reloadable: the FMU was built from a modified description (digest " in text
+        robot = reload_fmu_robot(heavy_scara_fmu())
+        scara = load_robot("scara")
+        assert robot.name == "scara" and robot.description.digest() != scara.description.digest()
+        assert robot.description.links[1].mass == pytest.approx(1.5 * scara.description.links[1].mass)
+        report = validate_fmu(heavy_scara_fmu(), t_end=1.0, with_cosim=False)
+    print(report.format())
     assert report.ok, report.problems()
+    assert report.errors and report.roundtrip is not None

@@ -4,7 +4,9 @@ Each repetition: a refused instantiation (wrong GUID), a Co-Simulation instance
 (250 steps, FMU state get / serialise / deserialise / set / free, a rejected
 short buffer, a discarded non-finite step, a call out of order, reset, free) and
 a Model Exchange instance (states, derivatives, a directional derivative, FMU
-state, free). valgrind must report no error and no leak.
+state, free). Three FMU states per repetition are never freed by the driver:
+fmi2FreeInstance has to free them (FMI 2.0, 2.1.5). valgrind must report no
+error and no leak.
 """
 
 from __future__ import annotations

@@ -7,8 +7,14 @@
  * Status policy: a call that returns fmi2Error logs why and puts the instance
  * in its error mode (from which fmi2SetFMUstate, fmi2Reset, fmi2FreeInstance
  * and the getters remain legal); a rejected call changes no value. fmi2Discard
- * (a co-simulation step whose state became non-finite, derivatives that are
- * not finite, a status that is not available) keeps the last good state.
+ * (a co-simulation step whose state became non-finite, a status that is not
+ * available) keeps the last good state. Non-finite computed values (derivatives,
+ * outputs, directional derivatives) have one policy wherever they are read:
+ * they are returned as computed, with fmi2Discard and a message.
+ *
+ * The fmi2Component must be NULL or an instance of this FMU: NULL is refused
+ * with fmi2Error; any other pointer (a freed instance, another FMU's) is
+ * undefined behaviour, as in FMI 2.0, and is not detected.
  */
 #include <math.h>
 #include <stdio.h>
@@ -76,16 +82,9 @@ static fmi2Status fail(MwInstance *inst, const char *fn, const char *what) {
     return fmi2Error;
 }
 
-/* The instance behind c if c is one of ours, else NULL. */
-static MwInstance *as_instance(fmi2Component c) {
-    MwInstance *inst = (MwInstance *)c;
-    if (inst == NULL || inst->magic != MW_INSTANCE_MAGIC) return NULL;
-    return inst;
-}
-
 /* The instance if the call is legal for its interface type and mode; else logs, returns NULL. */
 static MwInstance *enter(fmi2Component c, const char *fn, int interface_type, unsigned int modes) {
-    MwInstance *inst = as_instance(c);
+    MwInstance *inst = (MwInstance *)c;
     if (inst == NULL) return NULL;
     mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s", fn);
     if (interface_type == FOR_ME && inst->type != fmi2ModelExchange) {
@@ -138,6 +137,24 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     return mw_set_logging(inst, loggingOn, nCategories, categories);
 }
 
+/* Times within a relative 1e-12 (absolute near 0) count as equal, as floating-point sums of steps differ. */
+static int is_close(double a, double b) {
+    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
+    return fabs(a - b) <= 1e-12 * (scale > 1.0 ? scale : 1.0);
+}
+
+/* Whether t is past the stopTime given to fmi2SetupExperiment (FMI 2.0, 2.1.6), rounding forgiven. */
+static int past_stop_time(const MwInstance *inst, double t) {
+    return inst->stop_time_defined && t > inst->stop_time && !is_close(t, inst->stop_time);
+}
+
+/* A non-finite computed value: logged, and the call returns fmi2Discard (the one policy). */
+static fmi2Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
+    if (mw_all_finite(v, n)) return fmi2OK;
+    mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
+    return fmi2Discard;
+}
+
 static void log_before_instance(const fmi2CallbackFunctions *functions, fmi2String name, const char *message) {
     functions->logger(functions->componentEnvironment, name != NULL ? name : "", fmi2Error, "logStatusError",
                       message);
@@ -151,7 +168,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     (void)fmuResourceLocation; /* the model needs no resources */
     (void)visible;
 
-    if (functions == NULL || functions->logger == NULL) return NULL; /* nowhere to report */
+    if (functions == NULL || functions->logger == NULL) {
+        /* no logger to report through: say it on stderr, the only channel left */
+        fprintf(stderr, "fmi2Instantiate(%.100s): refused: %s is NULL (FMI 2.0 requires a logger)\n",
+                instanceName != NULL ? instanceName : "", functions == NULL ? "functions" : "functions->logger");
+        return NULL;
+    }
     if (functions->allocateMemory == NULL || functions->freeMemory == NULL) {
         log_before_instance(functions, instanceName, "fmi2Instantiate: allocateMemory and freeMemory are required");
         return NULL;
@@ -178,7 +200,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 }
 
 void fmi2FreeInstance(fmi2Component c) {
-    MwInstance *inst = as_instance(c);
+    MwInstance *inst = (MwInstance *)c;
     if (inst == NULL) return;
     mw_log(inst, fmi2OK, MW_LOG_CALLS, "fmi2FreeInstance");
     mw_instance_free(inst);
@@ -194,6 +216,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
         return fail(inst, "fmi2SetupExperiment", "stopTime is before startTime or not a number");
     inst->time = startTime;
     inst->last_successful_time = startTime;
+    inst->stop_time_defined = stopTimeDefined ? 1 : 0;
+    inst->stop_time = stopTimeDefined ? stopTime : 0.0;
     return fmi2OK;
 }
 
@@ -265,7 +289,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         default: return fail(inst, "fmi2GetReal", "corrupt variable table");
         }
     }
-    return fmi2OK;
+    return non_finite(inst, "fmi2GetReal", "the values", value, nvr);
 }
 
 /* Whether variable v may be set in the instance's current mode; logs why not. */
@@ -280,6 +304,12 @@ static int settable_now(MwInstance *inst, const MwVariable *v) {
     case MW_SET_INITIAL:
         if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT)))
             why = "is fixed: it can only be set before fmi2ExitInitializationMode";
+        break;
+    case MW_SET_STATE:
+        /* FMI 2.0.1: continuous states may also be set in Event and Continuous-Time Mode */
+        if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS)))
+            why = "is a continuous state: it can be set before fmi2ExitInitializationMode, or in event and "
+                  "continuous-time mode (Model Exchange)";
         break;
     case MW_SET_TUNABLE:
         if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_STEP_COMPLETE)))
@@ -363,12 +393,6 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* ---------------------------------------------------------------- FMU state */
 
-static MwSnapshot *as_snapshot(const MwInstance *inst, fmi2FMUstate s) {
-    MwSnapshot *snap = (MwSnapshot *)s;
-    if (snap == NULL || snap->magic != MW_SNAPSHOT_MAGIC || snap->model != inst->model) return NULL;
-    return snap;
-}
-
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     MwSnapshot *snap;
     ENTER(GetFMUstate, FOR_ANY, MODES_FMUstate);
@@ -378,8 +402,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "out of memory");
         *FMUstate = (fmi2FMUstate)snap;
     } else {
-        snap = as_snapshot(inst, *FMUstate);
-        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "*FMUstate is not an FMU state of this model");
+        snap = mw_snapshot_find(inst, *FMUstate);
+        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "*FMUstate is not an FMU state of this instance");
     }
     mw_snapshot_take(inst, snap);
     return fmi2OK;
@@ -388,8 +412,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     const MwSnapshot *snap;
     ENTER(SetFMUstate, FOR_ANY, MODES_FMUstate);
-    snap = as_snapshot(inst, FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2SetFMUstate", "FMUstate is NULL or not an FMU state of this model");
+    snap = mw_snapshot_find(inst, FMUstate);
+    if (snap == NULL) return fail(inst, "fmi2SetFMUstate", "FMUstate is NULL or not an FMU state of this instance");
     if (!mw_mode_valid(inst, snap->mode))
         return fail(inst, "fmi2SetFMUstate", "the FMU state was taken by an instance of the other interface type");
     mw_snapshot_restore(inst, snap);
@@ -401,10 +425,9 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     ENTER(FreeFMUstate, FOR_ANY, MODES_FMUstate);
     if (null_arg(inst, "fmi2FreeFMUstate", "FMUstate", FMUstate)) return fmi2Error;
     if (*FMUstate == NULL) return fmi2OK;
-    snap = as_snapshot(inst, *FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2FreeFMUstate", "*FMUstate is not an FMU state of this model");
-    snap->magic = 0;
-    inst->cb.freeMemory(snap);
+    snap = mw_snapshot_find(inst, *FMUstate);
+    if (snap == NULL) return fail(inst, "fmi2FreeFMUstate", "*FMUstate is not an FMU state of this instance");
+    mw_snapshot_free(inst, snap);
     *FMUstate = NULL;
     return fmi2OK;
 }
@@ -412,8 +435,8 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
     ENTER(SerializedFMUstateSize, FOR_ANY, MODES_FMUstate);
     if (null_arg(inst, "fmi2SerializedFMUstateSize", "size", size)) return fmi2Error;
-    if (as_snapshot(inst, FMUstate) == NULL)
-        return fail(inst, "fmi2SerializedFMUstateSize", "FMUstate is NULL or not an FMU state of this model");
+    if (mw_snapshot_find(inst, FMUstate) == NULL)
+        return fail(inst, "fmi2SerializedFMUstateSize", "FMUstate is NULL or not an FMU state of this instance");
     *size = mw_serialized_size(inst->model);
     return fmi2OK;
 }
@@ -422,15 +445,15 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     const MwSnapshot *snap;
     char what[128];
     ENTER(SerializeFMUstate, FOR_ANY, MODES_FMUstate);
-    snap = as_snapshot(inst, FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2SerializeFMUstate", "FMUstate is NULL or not an FMU state of this model");
+    snap = mw_snapshot_find(inst, FMUstate);
+    if (snap == NULL) return fail(inst, "fmi2SerializeFMUstate", "FMUstate is NULL or not an FMU state of this instance");
     if (null_arg(inst, "fmi2SerializeFMUstate", "serializedState[]", serializedState)) return fmi2Error;
     if (size != mw_serialized_size(inst->model)) {
         snprintf(what, sizeof(what), "size %lu differs from fmi2SerializedFMUstateSize, %lu bytes",
                  (unsigned long)size, (unsigned long)mw_serialized_size(inst->model));
         return fail(inst, "fmi2SerializeFMUstate", what);
     }
-    mw_serialize(snap, serializedState);
+    mw_serialize(inst->model, snap, serializedState);
     return fmi2OK;
 }
 
@@ -439,22 +462,16 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     MwSnapshot *snap;
     const char *problem;
     char what[192];
-    int created = 0;
     ENTER(DeSerializeFMUstate, FOR_ANY, MODES_FMUstate);
     if (null_arg(inst, "fmi2DeSerializeFMUstate", "serializedState[]", serializedState) ||
         null_arg(inst, "fmi2DeSerializeFMUstate", "FMUstate", FMUstate))
         return fmi2Error;
-    if (*FMUstate == NULL) {
-        snap = mw_snapshot_new(inst);
-        if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "out of memory");
-        created = 1;
-    } else {
-        snap = as_snapshot(inst, *FMUstate);
-        if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "*FMUstate is not an FMU state of this model");
-    }
+    /* *FMUstate is an output: its incoming value is not read; a new FMU state is always allocated */
+    snap = mw_snapshot_new(inst);
+    if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "out of memory");
     problem = mw_deserialize(inst, serializedState, size, snap);
     if (problem != NULL) {
-        if (created) inst->cb.freeMemory(snap);
+        mw_snapshot_free(inst, snap);
         snprintf(what, sizeof(what), "%lu bytes rejected: %s", (unsigned long)size, problem);
         return fail(inst, "fmi2DeSerializeFMUstate", what);
     }
@@ -522,7 +539,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             dvUnknown[i] = inst->dx[v->index];
         }
     }
-    return fmi2OK;
+    return non_finite(inst, fn, "the directional derivatives", dvUnknown, nUnknown);
 }
 
 /* -------------------------------------------------------- Model Exchange */
@@ -553,8 +570,14 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    char what[192];
     ENTER(CompletedIntegratorStep, FOR_ME, MODES_CompletedIntegratorStep);
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (past_stop_time(inst, inst->time)) {
+        snprintf(what, sizeof(what), "an integrator step completed at t = %.17g, past the stopTime %.17g of "
+                 "fmi2SetupExperiment", inst->time, inst->stop_time);
+        return fail(inst, "fmi2CompletedIntegratorStep", what);
+    }
     if (null_arg(inst, "fmi2CompletedIntegratorStep", "enterEventMode", enterEventMode) ||
         null_arg(inst, "fmi2CompletedIntegratorStep", "terminateSimulation", terminateSimulation))
         return fmi2Error;
@@ -564,8 +587,23 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    char what[192];
     ENTER(SetTime, FOR_ME, MODES_SetTime);
     if (!isfinite(time)) return fail(inst, "fmi2SetTime", "time is not finite");
+    /* Past stopTime: an error in event mode. In continuous-time mode an integrator may try points past
+       it inside a step that it then interpolates back (CVode does); the step is refused only if it is
+       accepted there (fmi2CompletedIntegratorStep). */
+    if (inst->mode == MW_MODE_EVENT && past_stop_time(inst, time)) {
+        snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g of fmi2SetupExperiment", time,
+                 inst->stop_time);
+        return fail(inst, "fmi2SetTime", what);
+    }
+    /* in event mode time stands still or moves on to the event; it never goes back */
+    if (inst->mode == MW_MODE_EVENT && time < inst->time && !is_close(time, inst->time)) {
+        snprintf(what, sizeof(what), "time %.17g is before the current time %.17g: in event mode time may not go back",
+                 time, inst->time);
+        return fail(inst, "fmi2SetTime", what);
+    }
     inst->time = time;
     return fmi2OK;
 }
@@ -598,11 +636,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
     if (null_arg(inst, fn, "derivatives[]", derivatives)) return fmi2Error;
     if (mw_update_derivatives(inst) != 0) return fail(inst, fn, "the model failed to evaluate the derivatives");
     memcpy(derivatives, inst->xdot, nx * sizeof(double));
-    if (!mw_all_finite(inst->xdot, nx)) {
-        mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: the derivatives at t = %.17g are not finite", fn, inst->time);
-        return fmi2Discard;
-    }
-    return fmi2OK;
+    return non_finite(inst, fn, "the derivatives", derivatives, nx);
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
@@ -660,8 +694,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                       fmi2Boolean noSetFMUStatePriorToCurrentCommunicationPoint) {
     const char *fn = "fmi2DoStep";
     fmi2Status status;
-    char what[224];
-    double tol;
+    char what[256];
+    double tol, next;
+    unsigned long long n;
     ENTER(DoStep, FOR_CS, MODES_DoStep);
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
     if (!isfinite(currentCommunicationPoint)) return fail(inst, fn, "currentCommunicationPoint is not finite");
@@ -675,7 +710,22 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                  currentCommunicationPoint, inst->time);
         return fail(inst, fn, what);
     }
-    status = mw_do_step(inst, currentCommunicationPoint, communicationStepSize);
+    next = currentCommunicationPoint + communicationStepSize;
+    if (past_stop_time(inst, next)) {
+        snprintf(what, sizeof(what), "a step from %.17g of %.17g s ends past the stopTime %.17g of fmi2SetupExperiment",
+                 currentCommunicationPoint, communicationStepSize, inst->stop_time);
+        return fail(inst, fn, what);
+    }
+    n = mw_substeps(communicationStepSize, inst->h_int);
+    if (n == 0) {
+        snprintf(what, sizeof(what), "communicationStepSize %g needs more than %llu sub-steps of internal_step %g s, "
+                 "the most one call takes: use shorter communication steps or a longer internal_step",
+                 communicationStepSize, MW_MAX_SUBSTEPS, inst->h_int);
+        return fail(inst, fn, what);
+    }
+    mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s", fn,
+           currentCommunicationPoint, n, communicationStepSize / (double)n);
+    status = mw_do_step(inst, currentCommunicationPoint, communicationStepSize, n);
     if (status == fmi2Discard) {
         inst->mode = MW_MODE_STEP_FAILED;
     } else if (status == fmi2Error) {

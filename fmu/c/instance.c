@@ -87,7 +87,6 @@ MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name
     if (logging_on) inst->log_mask |= 1u << MW_LOG_CALLS;
     inst->mode = MW_MODE_INSTANTIATED;
     mw_set_start_values(inst);
-    inst->magic = MW_INSTANCE_MAGIC;
     return inst;
 }
 
@@ -95,7 +94,8 @@ void mw_instance_free(MwInstance *inst) {
     fmi2CallbackFreeMemory release;
     if (inst == NULL) return;
     release = inst->cb.freeMemory;
-    inst->magic = 0;
+    /* FMU states the importer did not free go with the instance (FMI 2.0, 2.1.5) */
+    while (inst->snapshots != NULL) mw_snapshot_free(inst, inst->snapshots);
     if (inst->name != NULL) release(inst->name);
     if (inst->block != NULL) release(inst->block);
     if (inst->arg != NULL) release((void *)inst->arg);
@@ -117,6 +117,8 @@ void mw_set_start_values(MwInstance *inst) {
     inst->h_int = m->step_start;
     inst->time = 0.0;
     inst->last_successful_time = 0.0;
+    inst->stop_time_defined = 0;
+    inst->stop_time = 0.0;
     mw_invalidate(inst);
 }
 
@@ -258,23 +260,22 @@ static int rk4_step(MwInstance *inst, double hs) {
     return 0;
 }
 
-fmi2Status mw_do_step(MwInstance *inst, double tc, double h) {
-    const size_t nx = inst->model->nx;
-    double ratio = h / inst->h_int;
-    double n_real, hs;
-    unsigned long long n, k;
-
-    /* n = ceil(h / h_int), forgiving the rounding of h / h_int just above an integer. */
-    n_real = ceil(ratio * (1.0 - 1e-12));
+unsigned long long mw_substeps(double h, double h_int) {
+    double ratio = h / h_int;
+    double nearest = floor(ratio + 0.5);
+    double n_real;
+    if (!(ratio > 0.0) || !isfinite(ratio)) return 0;
+    /* a ratio that is an integer up to rounding noise counts as that integer */
+    n_real = fabs(ratio - nearest) <= MW_SUBSTEP_RTOL * ratio ? nearest : ceil(ratio);
     if (n_real < 1.0) n_real = 1.0;
-    if (!(n_real <= 1e12)) {
-        mw_log(inst, fmi2Error, MW_LOG_ERROR,
-               "fmi2DoStep: communicationStepSize %g needs %g sub-steps of at most %g s, more than 1e12",
-               h, n_real, inst->h_int);
-        return fmi2Error;
-    }
-    n = (unsigned long long)n_real;
-    hs = h / (double)n;
+    if (!(n_real <= (double)MW_MAX_SUBSTEPS)) return 0;
+    return (unsigned long long)n_real;
+}
+
+fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long n) {
+    const size_t nx = inst->model->nx;
+    const double hs = h / (double)n;
+    unsigned long long k;
 
     if (nx > 0) memcpy(inst->x_save, inst->x, nx * sizeof(double));
     mw_invalidate(inst);
@@ -297,16 +298,40 @@ fmi2Status mw_do_step(MwInstance *inst, double tc, double h) {
 
 /* --------------------------------------------------------------- snapshots */
 
-MwSnapshot *mw_snapshot_new(const MwInstance *inst) {
+MwSnapshot *mw_snapshot_new(MwInstance *inst) {
     const MwModel *m = inst->model;
     size_t nv = m->nx + m->nu + m->np;
     MwSnapshot *snap = (MwSnapshot *)inst->cb.allocateMemory(1, sizeof(MwSnapshot) + nv * sizeof(double));
     if (snap == NULL) return NULL;
-    snap->magic = MW_SNAPSHOT_MAGIC;
-    snap->model = m;
     snap->mode = inst->mode;
+    snap->time = inst->time;
+    snap->last_successful_time = inst->last_successful_time;
+    snap->h_int = inst->h_int;
     snap->values = (double *)(void *)(snap + 1);
+    snap->prev = NULL;
+    snap->next = inst->snapshots;
+    if (inst->snapshots != NULL) inst->snapshots->prev = snap;
+    inst->snapshots = snap;
     return snap;
+}
+
+MwSnapshot *mw_snapshot_find(const MwInstance *inst, const void *s) {
+    MwSnapshot *snap;
+    if (s == NULL) return NULL;
+    for (snap = inst->snapshots; snap != NULL; snap = snap->next) {
+        if ((const void *)snap == s) return snap;
+    }
+    return NULL;
+}
+
+void mw_snapshot_free(MwInstance *inst, MwSnapshot *snap) {
+    if (snap->prev != NULL) {
+        snap->prev->next = snap->next;
+    } else {
+        inst->snapshots = snap->next;
+    }
+    if (snap->next != NULL) snap->next->prev = snap->prev;
+    inst->cb.freeMemory(snap);
 }
 
 void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap) {
@@ -375,8 +400,7 @@ static unsigned int get_u32(const fmi2Byte *in, size_t at) {
     return v;
 }
 
-void mw_serialize(const MwSnapshot *snap, fmi2Byte *out) {
-    const MwModel *m = snap->model;
+void mw_serialize(const MwModel *m, const MwSnapshot *snap, fmi2Byte *out) {
     unsigned long long total = (unsigned long long)mw_serialized_size(m);
     size_t guid_len = strlen(m->guid);
     size_t nv = m->nx + m->nu + m->np;

@@ -32,11 +32,14 @@ typedef enum {
     MW_LOG_COUNT = 5
 } MwLogCategory;
 
-#define MW_INSTANCE_MAGIC 0x4d57464du /* "MWFM" */
-#define MW_SNAPSHOT_MAGIC 0x4d575353u /* "MWSS" */
+/* Most RK4 sub-steps one fmi2DoStep may take: bounds the work (and the time) of one call. */
+#define MW_MAX_SUBSTEPS 1000000ull
+/* Relative noise in communicationStepSize / internal_step forgiven when counting sub-steps. */
+#define MW_SUBSTEP_RTOL 1e-8
+
+typedef struct MwSnapshot MwSnapshot;
 
 typedef struct {
-    unsigned int magic;
     const MwModel *model;
     fmi2Type type;
     unsigned int mode;
@@ -47,6 +50,11 @@ typedef struct {
     double time;
     double last_successful_time;
     double h_int;
+    int stop_time_defined; /* fmi2SetupExperiment's stopTime, enforced by fmi2DoStep and fmi2SetTime */
+    double stop_time;
+
+    /* every FMU state taken from this instance and not yet freed, freed with the instance */
+    MwSnapshot *snapshots;
 
     /* model vectors */
     double *x, *u, *p, *xdot, *y;
@@ -68,15 +76,36 @@ typedef struct {
 } MwInstance;
 
 /* A copy of what fmi2GetFMUstate saves: mode, times, internal step, x, u and p. */
-typedef struct {
-    unsigned int magic;
-    const MwModel *model;
+struct MwSnapshot {
+    MwSnapshot *prev, *next; /* the owning instance's list */
     unsigned int mode;
     double time;
     double last_successful_time;
     double h_int;
     double *values; /* nx + nu + np, right after the struct in the same allocation */
-} MwSnapshot;
+};
+
+#define mw_instance_new MW_SYMBOL(mw_instance_new)
+#define mw_instance_free MW_SYMBOL(mw_instance_free)
+#define mw_set_start_values MW_SYMBOL(mw_set_start_values)
+#define mw_invalidate MW_SYMBOL(mw_invalidate)
+#define mw_log MW_SYMBOL(mw_log)
+#define mw_set_logging MW_SYMBOL(mw_set_logging)
+#define mw_update_derivatives MW_SYMBOL(mw_update_derivatives)
+#define mw_update_outputs MW_SYMBOL(mw_update_outputs)
+#define mw_all_finite MW_SYMBOL(mw_all_finite)
+#define mw_substeps MW_SYMBOL(mw_substeps)
+#define mw_do_step MW_SYMBOL(mw_do_step)
+#define mw_directional MW_SYMBOL(mw_directional)
+#define mw_snapshot_new MW_SYMBOL(mw_snapshot_new)
+#define mw_snapshot_find MW_SYMBOL(mw_snapshot_find)
+#define mw_snapshot_free MW_SYMBOL(mw_snapshot_free)
+#define mw_snapshot_take MW_SYMBOL(mw_snapshot_take)
+#define mw_snapshot_restore MW_SYMBOL(mw_snapshot_restore)
+#define mw_serialized_size MW_SYMBOL(mw_serialized_size)
+#define mw_serialize MW_SYMBOL(mw_serialize)
+#define mw_deserialize MW_SYMBOL(mw_deserialize)
+#define mw_mode_valid MW_SYMBOL(mw_mode_valid)
 
 MW_HIDDEN MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name,
                                       const fmi2CallbackFunctions *cb, fmi2Boolean logging_on);
@@ -98,17 +127,30 @@ MW_HIDDEN int mw_update_derivatives(MwInstance *inst);
 MW_HIDDEN int mw_update_outputs(MwInstance *inst);
 MW_HIDDEN int mw_all_finite(const double *v, size_t n);
 
-/* The co-simulation step from tc to tc + h; fmi2Discard keeps the state at tc. */
-MW_HIDDEN fmi2Status mw_do_step(MwInstance *inst, double tc, double h);
+/*
+ * Number of equal RK4 sub-steps of a communication step h: ceil(h / h_int), except that a
+ * ratio within a relative MW_SUBSTEP_RTOL of an integer k gives k, so that rounding noise
+ * in h (importers that accumulate time differently) never changes the count. 0 if the
+ * count would exceed MW_MAX_SUBSTEPS (or is not finite).
+ */
+MW_HIDDEN unsigned long long mw_substeps(double h, double h_int);
+
+/* The co-simulation step from tc to tc + h in n sub-steps; fmi2Discard keeps the state at tc. */
+MW_HIDDEN fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long n);
 
 /* Forward-mode derivatives: seeds dx, du, dp must be filled; 0 on success. */
 MW_HIDDEN int mw_directional(MwInstance *inst, int need_dxdot, int need_dy);
 
-MW_HIDDEN MwSnapshot *mw_snapshot_new(const MwInstance *inst);
+/* A new FMU state, linked into the instance's list; NULL when out of memory. */
+MW_HIDDEN MwSnapshot *mw_snapshot_new(MwInstance *inst);
+/* s if it is an FMU state of this instance not yet freed, else NULL (compares pointers only). */
+MW_HIDDEN MwSnapshot *mw_snapshot_find(const MwInstance *inst, const void *s);
+/* Unlink from the instance's list and free. */
+MW_HIDDEN void mw_snapshot_free(MwInstance *inst, MwSnapshot *snap);
 MW_HIDDEN void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap);
 MW_HIDDEN void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap);
 MW_HIDDEN size_t mw_serialized_size(const MwModel *model);
-MW_HIDDEN void mw_serialize(const MwSnapshot *snap, fmi2Byte *out);
+MW_HIDDEN void mw_serialize(const MwModel *model, const MwSnapshot *snap, fmi2Byte *out);
 /* 0 on success, else a message saying what is wrong with the bytes. */
 MW_HIDDEN const char *mw_deserialize(const MwInstance *inst, const fmi2Byte *in, size_t size, MwSnapshot *snap);
 MW_HIDDEN int mw_mode_valid(const MwInstance *inst, unsigned int mode);

@@ -21,6 +21,21 @@
 #define MW_HIDDEN
 #endif
 
+/*
+ * Names of the wrapper's internal functions. A shared library hides them
+ * (MW_HIDDEN); a source FMU compiled with FMI2_FUNCTION_PREFIX, to be linked
+ * statically next to other FMUs, gets them prefixed like the fmi2 functions,
+ * so that two models in one program never share a symbol.
+ */
+#if defined(FMI2_FUNCTION_PREFIX)
+#define MW_PASTE_(a, b) a##b
+#define MW_PASTE(a, b) MW_PASTE_(a, b)
+#define MW_SYMBOL(name) MW_PASTE(FMI2_FUNCTION_PREFIX, name)
+#else
+#define MW_SYMBOL(name) name
+#endif
+#define mw_model MW_SYMBOL(mw_model)
+
 /* Integer type of the CasADi generated code (its option casadi_int). */
 typedef long long int mw_int;
 
@@ -48,7 +63,9 @@ typedef enum {
     MW_SET_NEVER = 0,   /* calculated: outputs, derivatives */
     MW_SET_INITIAL = 1, /* initial="exact" states and fixed parameters: before initialisation ends */
     MW_SET_TUNABLE = 2, /* tunable parameters: also at communication points / event mode */
-    MW_SET_INPUT = 3    /* inputs: at any time after instantiation */
+    MW_SET_INPUT = 3,   /* inputs: at any time after instantiation */
+    MW_SET_STATE = 4    /* continuous states: before initialisation ends, and in Model Exchange's event and
+                           continuous-time modes (FMI 2.0.1) */
 } MwSettable;
 
 typedef struct {

@@ -16,13 +16,13 @@ typedef casadi_int mw_int;
 typedef int (*mw_eval_fn)(const double **arg, double **res, mw_int *iw, double *w, int mem);
 typedef int (*mw_work_fn)(mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
 
-int mw_batch(void *eval_ptr, void *work_ptr,
+/* eval and work are passed as function pointers (ctypes hands over their addresses): no
+   conversion between object and function pointers, which ISO C does not define. */
+int mw_batch(mw_eval_fn eval, mw_work_fn work,
              int n_in, const double *const *in, const long long *in_stride,
              int n_out, double *const *out, const long long *out_stride,
              long long n_points)
 {
-    mw_eval_fn eval = (mw_eval_fn)eval_ptr;
-    mw_work_fn work = (mw_work_fn)work_ptr;
     mw_int sz_arg = 0, sz_res = 0, sz_iw = 0, sz_w = 0;
     if (work(&sz_arg, &sz_res, &sz_iw, &sz_w) != 0) return -1;
     if (sz_arg < n_in || sz_res < n_out) return -2;

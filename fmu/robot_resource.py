@@ -1,0 +1,82 @@
+"""The robot description carried inside an FMU (``resources/robot.json``).
+
+Validation and the closed-loop tools rebuild the Python model of an FMU from
+the FMU alone: the exporter writes the whole :class:`model.RobotDescription`
+(every link field, gravity, rest, base and tool, whatever the description
+holds) as JSON into ``resources/``, without the path of the file it came from,
+so the FMU names nothing of the build machine.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import zipfile
+from pathlib import Path
+from typing import Any
+
+__all__ = ["ROBOT_RESOURCE", "description_to_json", "description_from_json", "read_robot_resource"]
+
+#: Where the description lives inside the FMU.
+ROBOT_RESOURCE = "resources/robot.json"
+_FORMAT = "manipulator-workbench robot description 1"
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready: tuples and mappings to lists and dicts, numpy scalars to floats."""
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict) or hasattr(value, "items"):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (str, bool, int)) or value is None:
+        return value
+    return float(value)
+
+
+def _tuples(value: Any) -> Any:
+    """Lists back to the tuples of the frozen dataclasses."""
+    if isinstance(value, list):
+        return tuple(_tuples(v) for v in value)
+    return value
+
+
+def description_to_json(description: Any) -> str:
+    """The description as JSON text; ``path`` is left out (the FMU keeps no path of the build machine)."""
+    data = {f.name: getattr(description, f.name) for f in dataclasses.fields(description) if f.name != "path"}
+    data["links"] = [{f.name: getattr(lk, f.name) for f in dataclasses.fields(lk)} for lk in description.links]
+    data["extra"] = dict(description.extra)
+    return json.dumps({"format": _FORMAT, "description": _plain(data)}, indent=1, sort_keys=True,
+                      allow_nan=False) + "\n"
+
+
+def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
+    """The :class:`model.RobotDescription` written by :func:`description_to_json`.
+
+    Raises
+    ------
+    model.RobotDescriptionError
+        The text is not such a description (``source`` names where it came from).
+    """
+    import types
+
+    from model.description import LinkDescription, RobotDescription, RobotDescriptionError
+
+    try:
+        doc = json.loads(text)
+        if doc.get("format") != _FORMAT:
+            raise ValueError(f"format {doc.get('format')!r}, expected {_FORMAT!r}")
+        data = dict(doc["description"])
+        links = tuple(LinkDescription(**{k: _tuples(v) for k, v in lk.items()}) for lk in data.pop("links"))
+        extra = types.MappingProxyType(dict(data.pop("extra", {})))
+        return RobotDescription(links=links, extra=extra, path="", **{k: _tuples(v) for k, v in data.items()})
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise RobotDescriptionError(f"{source}: not a robot description of this workbench: {exc}") from None
+
+
+def read_robot_resource(fmu_path: str | Path) -> Any | None:
+    """The description embedded in an FMU, or None if it has none (FMUs of other tools, older exports)."""
+    with zipfile.ZipFile(fmu_path) as zf:
+        if ROBOT_RESOURCE not in zf.namelist():
+            return None
+        text = zf.read(ROBOT_RESOURCE).decode()
+    return description_from_json(text, f"{fmu_path}: {ROBOT_RESOURCE}")
