@@ -89,11 +89,18 @@ def check_kinematics_against_rtb(robot, ref, qs):
 
 
 def check_dynamics_against_rtb(dyn, ref, n, seed):
+    """rne against RTB's rne_python; B, C qd and g against RTB's own and against rne_python passes
+    (B e_j = rne(q, 0, e_j) without gravity, C qd = rne(q, qd, 0) without gravity, g = rne(q, 0, 0))."""
+    zero, no_g = np.zeros(n), np.zeros(3)
     for q, qd, qdd in states(n, seed):
         close(dyn.rne(q, qd, qdd), ref.rne_python(q, qd, qdd))
-        close(dyn.inertia(q), ref.inertia(q))
-        close(dyn.coriolis(q, qd) @ qd, ref.coriolis(q, qd) @ qd)
-        close(dyn.gravload(q), ref.gravload(q))
+        B_python = np.column_stack([ref.rne_python(q, zero, e, gravity=no_g) for e in np.eye(n)])
+        for B in (ref.inertia(q), B_python):
+            close(dyn.inertia(q), B)
+        for Cqd in (ref.coriolis(q, qd) @ qd, ref.rne_python(q, qd, zero, gravity=no_g)):
+            close(dyn.coriolis(q, qd) @ qd, Cqd)
+        for g in (ref.gravload(q), ref.rne_python(q, zero, zero)):
+            close(dyn.gravload(q), g)
 
 
 def check_against_pinocchio(robot, dyn, model, seed):
