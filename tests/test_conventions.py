@@ -366,3 +366,15 @@ def test_rpy_is_urdf_order():
 
     rpy = [0.3, -0.8, 2.0]
     assert np.abs(rpy_matrix(rpy) - rpy2r(rpy, order="zyx")).max() <= 1e-15
+
+
+def test_compiled_dynamics_of_a_free_text_name_use_its_identifier():
+    """A robot named with spaces and brackets compiles under its identifier and gives the symbolic torques."""
+    desc = dataclasses.replace(two_link_mdh(base=BASE, tool=TOOL), name="Two-link (MDH) arm #2")
+    robot = Robot(desc)
+    info = robot.dynamics.compile()
+    assert Path(info.library).name.startswith("Two_link_MDH_arm_2-reflected"), info.library
+    dyn = SymbolicDynamics(desc)
+    for q, qd, qdd in states(2, 71):
+        close(robot.rne(q, qd, qdd), dyn.rne(q, qd, qdd))
+        close(robot.inertia(q), dyn.inertia(q))
