@@ -105,20 +105,23 @@ class TorqueProfile:
 def feedforward_profile(robot: Any, t_end: float = 3.0, hold: float = 0.01) -> TorqueProfile:
     """Computed-torque feed-forward of the robot's task, held for ``hold`` s at a time.
 
-    The SCARA follows the seed's pick-and-place (first segment: rest to above
-    the pick point in 3 s); other robots a quintic from rest, +0.5 rad or m per
-    joint (within the limits). Motor torques are ``robot.rne(q, qd, qdd) / G``
-    at the middle of each hold interval.
+    A robot whose file has ``[[tasks]]`` follows its first task from the start
+    (the SCARA: the seed's pick-and-place, first segment rest to above the pick
+    point in 3 s); other robots a quintic from rest, +0.5 rad or m per joint
+    (within the limits). Motor torques are ``robot.rne(q, qd, qdd) / G`` at the
+    middle of each hold interval.
     """
-    from model.tasks import PICK_AND_PLACE, pick_and_place
+    from model.tasks import robot_tasks
     from model.trajectory import jtraj
 
     k = int(round(t_end / hold))
     if k < 1 or abs(k * hold - t_end) > 1e-9 * t_end:
         raise ValueError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
-    if robot.name == PICK_AND_PLACE.robot:
-        traj = pick_and_place(robot.description)
-        what = "pick-and-place of seed 000 (first segment: rest to A)"
+    tasks = robot_tasks(robot.description)
+    if tasks:
+        task = next(iter(tasks.values()))
+        traj = task.trajectory(dt=0.01)
+        what = f"task {task.name!r} of the robot file, from its start"
     else:
         lo, hi = robot.qlim
         q0 = robot.q_rest
