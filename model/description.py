@@ -243,7 +243,7 @@ _TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks", "
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
     "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
-    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source", "flip",
+    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source", "flip", "inertia_note",
 )
 _POSE_KEYS = ("xyz", "rpy")
 _TASK_REQUIRED = ("name", "waypoints")
@@ -292,7 +292,9 @@ def _check_keys(w: _Where, link: int | None, data: Mapping[str, Any], required: 
             raise w.fail(link, key, data[key], f"one of the known keys ({allowed}); this key is unknown")
 
 
-def _inertia(w: _Where, link: int, value: Any) -> tuple[float, ...]:
+def _inertia(w: _Where, link: int, value: Any, note: str | None = None) -> tuple[float, ...]:
+    """The six inertia entries, positive semi-definite; a warning if they break the triangle inequality,
+    unless the file acknowledges it in the link's ``inertia_note`` (published data kept as given)."""
     inertia = _vector(w, link, "inertia", value, 6)
     ixx, iyy, izz, ixy, iyz, ixz = inertia
     matrix = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
@@ -301,7 +303,7 @@ def _inertia(w: _Where, link: int, value: Any) -> tuple[float, ...]:
     if eig.min() < -1e-12 * scale:
         raise w.fail(link, "inertia", value, f"a positive semi-definite inertia (its eigenvalues are {eig.round(12).tolist()})")
     tol = 1e-12 * scale
-    if eig[0] + eig[1] < eig[2] - tol:
+    if eig[0] + eig[1] < eig[2] - tol and not note:
         warnings.warn(
             f"{w.path}, link {link + 1}: field 'inertia' = {list(value)!r} breaks the triangle inequality "
             f"(principal moments {eig.round(9).tolist()}): no rigid body has it; using it as given",
@@ -322,7 +324,10 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription:
         kw[key] = _number(w, i, key, data[key])
     kw["mass"] = _number(w, i, "mass", data.get("mass", 0.0), nonneg=True)
     kw["com"] = _vector(w, i, "com", data.get("com", [0.0, 0.0, 0.0]), 3)
-    kw["inertia"] = _inertia(w, i, data.get("inertia", [0.0] * 6))
+    note = data.get("inertia_note")
+    if note is not None and not (isinstance(note, str) and note.strip()):
+        raise w.fail(i, "inertia_note", note, "a non-empty text saying why the inertia is kept as given")
+    kw["inertia"] = _inertia(w, i, data.get("inertia", [0.0] * 6), note)
     kw["motor_inertia"] = _number(w, i, "motor_inertia", data.get("motor_inertia", 0.0), nonneg=True)
     kw["gear_ratio"] = _number(w, i, "gear_ratio", data.get("gear_ratio", 1.0), nonzero=True)
     kw["viscous_friction"] = _number(w, i, "viscous_friction", data.get("viscous_friction", 0.0), nonneg=True)

@@ -15,6 +15,7 @@ from model.description import (
     InertiaConsistencyWarning,
     RobotDescription,
     RobotDescriptionError,
+    description_from_dict,
     load_description,
 )
 
@@ -202,3 +203,26 @@ def test_torque_limit_must_be_positive(tmp_path):
     message = f"{path}, link 2: field 'torque_limit' = 0.0: expected a motor torque rating > 0 (N m)"
     with pytest.raises(RobotDescriptionError, match=re.escape(message)):
         load_description(path)
+
+
+def test_inertia_note_acknowledges_a_triangle_inequality_break():
+    import warnings
+
+    link = {"joint": "revolute", "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0, "mass": 1.0,
+            "inertia": [0.1, 0.02, 0.2, 0.0, 0.0, 0.0]}
+    with pytest.warns(InertiaConsistencyWarning, match="breaks the triangle inequality"):
+        description_from_dict({"name": "x", "links": [link]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        description_from_dict({"name": "x", "links": [{**link, "inertia_note": "published data, kept"}]})
+    with pytest.raises(RobotDescriptionError, match="field 'inertia_note' = '': expected a non-empty text"):
+        description_from_dict({"name": "x", "links": [{**link, "inertia_note": ""}]})
+
+
+@pytest.mark.parametrize("name", BUILTIN_ROBOTS)
+def test_builtin_robots_load_without_warnings(name):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_description(name)
