@@ -102,7 +102,7 @@ def test_energy_is_conserved_without_friction_and_torque(name, motor_model):
 
 @pytest.mark.parametrize("name", ["scara", "puma560"])
 def test_payload_changes_numbers_without_rebuild_and_matches_pinocchio(name):
-    pin = pytest.importorskip("pinocchio")
+    import pinocchio as pin  # mandatory reference
     base = _robot(name)
     dyn = base.dynamics
     n = base.n

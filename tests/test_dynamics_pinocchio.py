@@ -17,7 +17,7 @@ import pytest
 from model import InertiaConsistencyWarning, load_robot
 from references import available_robots, friction_reference, pinocchio_model, rtb_robot, symmetric_from_upper
 
-pin = pytest.importorskip("pinocchio")
+import pinocchio as pin  # a mandatory reference: a missing Pinocchio fails, never skips
 
 RTOL = 1e-10
 ROBOTS = available_robots()
