@@ -86,7 +86,9 @@ def measure(n: int, N: int, seed: int = 1) -> dict:
             warm = Dynamics(desc)
             warm_info = warm.compile()
             row["warm_ms"] = (time.perf_counter() - t0) * 1e3
-            assert warm_info.cached
+            if not warm_info.cached:  # a model source was edited between the two builds
+                say("  the second build missed the cache: its time is not a warm load")
+                row["warm_ms"] = float("nan")
         finally:
             if old is None:
                 os.environ.pop("MANIP_CACHE_DIR", None)
