@@ -15,6 +15,8 @@ import numpy as np
 from control_design.controllers import Controller
 from control_design.errors import DesignSpecError, SimulationDivergedError
 from control_design.reference import Reference
+from model.codegen import CompilerNotFoundError
+from model.dynamics import Workspace
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -68,7 +70,11 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
     q, qd = sched.q0.copy(), sched.qd0.copy()
     h = sched.dt / substeps
     G = plant.gear_ratio
-    p, ws = plant.parameters, plant.dynamics.workspace()
+    p = plant.parameters
+    try:
+        ws: Workspace | None = plant.dynamics.workspace()
+    except CompilerNotFoundError:  # the dynamics evaluate with CasADi (warned once); no buffers to hold
+        ws = None
     dyn_accel = plant.dynamics.accel  # compiled C
 
     def accel(q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:

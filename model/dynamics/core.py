@@ -211,9 +211,9 @@ class Dynamics:
             n = self.n
             return self._eval(name, [*(_vector(v, n, k, "joint values") for v, k in zip(values, names)),
                                      params.vector], 1)[0]
-        borrowed = ws is None
-        if borrowed:
-            pool = self._pool
+        pool: list[Workspace] | None = None
+        if ws is None:
+            pool = self._pool  # a recompile replaces the list: a workspace of the old library goes back to the old one
             try:
                 ws = pool.pop()
             except IndexError:
@@ -221,7 +221,7 @@ class Dynamics:
         elif ws.library is not lib:
             raise ValueError("ws: expected a workspace of this model's current library (make it with workspace())")
         try:
-            ev = ws.point(name)
+            ev = ws._points.get(name) or ws.point(name)
             error: Exception | None = None
             try:
                 for v, buf, k in zip(values, ev.inputs, names):
@@ -243,8 +243,8 @@ class Dynamics:
             ev()
             return ev.outputs[0].copy()
         finally:
-            if borrowed and ws.library is self._library:
-                self._pool.append(ws)
+            if pool is not None:
+                pool.append(ws)
 
     # --------------------------------------------------------------- numeric
     def inertia(self, q: Any, p: DynamicsParameters | None = None, *, ws: Workspace | None = None) -> np.ndarray:
