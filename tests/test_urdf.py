@@ -354,3 +354,14 @@ def test_base_link_inside_the_tree_starts_the_chain_there(tmp_path):
         pin.framesForwardKinematics(mine, md, q[1:])
         T_l1_tip = fd.oMf[full.getFrameId("l1")].inverse() * fd.oMf[full.getFrameId(tip)]
         close(md.oMf[fid].homogeneous, T_l1_tip.homogeneous)
+
+
+def test_info_prints_joint_origins_and_axes_of_a_urdf_robot(capsys):
+    from workbench.cli import main
+
+    assert main(["info", "ur5"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    header = lines.index("URDF joints: origin of joint i in link frame i-1 (xyz, rpy = URDF <origin>), unit axis")
+    # shoulder_lift_joint: <origin rpy="0.0 1.57079632679 0.0" xyz="0.0 0.13585 0.0"/>, <axis xyz="0 1 0"/>
+    assert lines[header + 3].split() == ["2", "revolute", "[0.0000,", "0.1358,", "0.0000]", "[0.00,", "90.00,", "0.00]",
+                                         "[0.0000,", "1.0000,", "0.0000]", "[-360.0,", "360.0]", "deg"]
