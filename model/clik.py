@@ -2,7 +2,8 @@
 
 ``qd = J#(q) (pd_d + K e)``, ``e = p_d - p(q)``, integrated by forward Euler at
 times ``t0 + k dt`` (integer k), as in the seed report 004 (spherical RRP arm
-on a straight segment). ``J`` is the position part of ``jacob0``, base frame.
+on a straight segment). ``J`` is the position part of ``jacob0``, world frame
+(the base frame when the robot states no base pose).
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ class CLIKResult:
     q, qd
         (N+1, n) joint values (rad or m) and the commanded joint rates (rad/s or m/s).
     p, p_d
-        (N+1, 3) tool position and desired position, base frame, m.
+        (N+1, 3) tool position and desired position, world frame, m.
     error_norm
         (N+1,) ``|p_d - p|`` over the masked components, m.
     inversion

@@ -89,11 +89,18 @@ def check_kinematics_against_rtb(robot, ref, qs):
 
 
 def check_dynamics_against_rtb(dyn, ref, n, seed):
+    """rne against RTB's rne_python; B, C qd and g against RTB's own and against rne_python passes
+    (B e_j = rne(q, 0, e_j) without gravity, C qd = rne(q, qd, 0) without gravity, g = rne(q, 0, 0))."""
+    zero, no_g = np.zeros(n), np.zeros(3)
     for q, qd, qdd in states(n, seed):
         close(dyn.rne(q, qd, qdd), ref.rne_python(q, qd, qdd))
-        close(dyn.inertia(q), ref.inertia(q))
-        close(dyn.coriolis(q, qd) @ qd, ref.coriolis(q, qd) @ qd)
-        close(dyn.gravload(q), ref.gravload(q))
+        B_python = np.column_stack([ref.rne_python(q, zero, e, gravity=no_g) for e in np.eye(n)])
+        for B in (ref.inertia(q), B_python):
+            close(dyn.inertia(q), B)
+        for Cqd in (ref.coriolis(q, qd) @ qd, ref.rne_python(q, qd, zero, gravity=no_g)):
+            close(dyn.coriolis(q, qd) @ qd, Cqd)
+        for g in (ref.gravload(q), ref.rne_python(q, zero, zero)):
+            close(dyn.gravload(q), g)
 
 
 def check_against_pinocchio(robot, dyn, model, seed):
@@ -359,3 +366,15 @@ def test_rpy_is_urdf_order():
 
     rpy = [0.3, -0.8, 2.0]
     assert np.abs(rpy_matrix(rpy) - rpy2r(rpy, order="zyx")).max() <= 1e-15
+
+
+def test_compiled_dynamics_of_a_free_text_name_use_its_identifier():
+    """A robot named with spaces and brackets compiles under its identifier and gives the symbolic torques."""
+    desc = dataclasses.replace(two_link_mdh(base=BASE, tool=TOOL), name="Two-link (MDH) arm #2")
+    robot = Robot(desc)
+    info = robot.dynamics.compile()
+    assert Path(info.library).name.startswith("Two_link_MDH_arm_2-reflected"), info.library
+    dyn = SymbolicDynamics(desc)
+    for q, qd, qdd in states(2, 71):
+        close(robot.rne(q, qd, qdd), dyn.rne(q, qd, qdd))
+        close(robot.inertia(q), dyn.inertia(q))
