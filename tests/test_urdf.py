@@ -80,14 +80,14 @@ def tiny_tilted(folder):
     ), "end"
 
 
-def builtin_urdf(name, filename, tip):
+def builtin_urdf(filename, tip):
     return lambda folder: (BUILTIN_DIR / filename, tip)
 
 
 CASES = {
-    "panda": builtin_urdf("panda", "panda.urdf", "panda_link8"),
-    "panda_hand_tcp": builtin_urdf("panda", "panda.urdf", "panda_hand_tcp"),
-    "ur5": builtin_urdf("ur5", "ur5_robot.urdf", "tool0"),
+    "panda": builtin_urdf("panda.urdf", "panda_link8"),
+    "panda_hand_tcp": builtin_urdf("panda.urdf", "panda_hand_tcp"),
+    "ur5": builtin_urdf("ur5_robot.urdf", "tool0"),
     "fixed_mid": tiny_fixed_mid,
     "tilted": tiny_tilted,
 }
