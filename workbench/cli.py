@@ -13,13 +13,14 @@ import warnings
 from typing import Sequence
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 import model
 from closed_loop.commands import register as register_closed_loop
 from control_design.commands import register as register_control
 from fmu.commands import register as register_fmu
 from model.commands import register as register_model
-from model.description import RobotDescriptionError
+from model.description import RobotDescriptionError, pose_matrix
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -36,12 +37,18 @@ def _cmd_robots(args: argparse.Namespace) -> int:
 
 
 def format_info(desc: model.RobotDescription) -> str:
-    """The DH table with units, then inertial and motor data, as plain text."""
+    """The DH table (a URDF robot: joint origins and axes) with units, then inertial and motor data, as plain text."""
     deg = 180.0 / np.pi
     lines = [f"{desc.name}: {desc.description}", f"source: {desc.source}" if desc.source else "",
-             f"gravity [m/s^2]: {list(desc.gravity)}", f"rest q: {desc.q_rest.tolist()}", "",
-             "Standard DH, A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha); q adds to theta (R) or d (P)",
-             f"{'j':>2} {'type':<9} {'a [m]':>9} {'alpha [deg]':>11} {'d [m]':>9} {'theta [deg]':>11} {'qlim':>22}"]
+             f"gravity [m/s^2]: {list(desc.gravity)}", f"rest q: {desc.q_rest.tolist()}", ""]
+    if desc.convention == "urdf":
+        lines += ["URDF joints: origin of joint i in link frame i-1 (xyz, rpy = URDF <origin>), unit axis",
+                  f"{'j':>2} {'type':<9} {'xyz [m]':>26} {'rpy [deg]':>24} {'axis':>22} {'qlim':>22}"]
+    else:
+        lines += [{"standard": "Standard DH, A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha)",
+                   "modified": "Modified DH, A_i = Rx(alpha) Tx(a) Rz(theta) Tz(d)"}[desc.convention]
+                  + "; q adds to theta (R) or d (P)",
+                  f"{'j':>2} {'type':<9} {'a [m]':>9} {'alpha [deg]':>11} {'d [m]':>9} {'theta [deg]':>11} {'qlim':>22}"]
     for i, lk in enumerate(desc.links, 1):
         if lk.qlim is None:
             lim = "-"
@@ -49,6 +56,12 @@ def format_info(desc: model.RobotDescription) -> str:
             lim = f"[{lk.qlim[0] * deg:.1f}, {lk.qlim[1] * deg:.1f}] deg"
         else:
             lim = f"[{lk.qlim[0]:.3f}, {lk.qlim[1]:.3f}] m"
+        if desc.convention == "urdf":
+            T = pose_matrix(lk.origin)
+            xyz, rpy = T[:3, 3], Rotation.from_matrix(T[:3, :3]).as_euler("xyz") * deg  # R = Rz(y) Ry(p) Rx(r)
+            row = [", ".join(f"{v:.{k}f}" for v in np.round(vec, k) + 0.0) for vec, k in ((xyz, 4), (rpy, 2), (lk.axis, 4))]
+            lines.append(f"{i:>2} {lk.joint:<9} {'[' + row[0] + ']':>26} {'[' + row[1] + ']':>24} {'[' + row[2] + ']':>22} {lim:>22}")
+            continue
         lines.append(f"{i:>2} {lk.joint:<9} {lk.a:>9.4f} {lk.alpha * deg:>11.2f} {lk.d:>9.4f} {lk.theta * deg:>11.2f} {lim:>22}")
     lines += ["", "Inertial data (centre of mass and inertia in frame i, inertia about the centre of mass)",
               f"{'j':>2} {'m [kg]':>8} {'com [m]':>26} {'[Ixx Iyy Izz Ixy Iyz Ixz] [kg m^2]':>44}"]
