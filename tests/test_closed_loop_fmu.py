@@ -266,15 +266,19 @@ def test_bad_inputs_are_named(robot, task, designs, plant_fmu, tmp_path):
         run_closed_loop(plant_fmu, controller, task, plant=robot, rate_hz=500.0)
 
 
-def test_a_plant_fmu_of_a_modified_robot_needs_the_plant_argument(robot, task, designs):
-    """The mass-scaled SCARA FMU records the name scara: the master must not simulate it as the built-in SCARA."""
+def test_a_plant_fmu_of_a_modified_robot_is_simulated_as_that_robot(robot, task, designs):
+    """The mass-scaled SCARA FMU records the name scara but carries its own description (resources/robot.json):
+    the master reloads that, not the built-in SCARA, and runs as with the plant Robot given."""
     controller = designs["pd"].controller(RATE)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
         heavy = heavy_scara_fmu()
-        with pytest.raises(ValueError, match=r"built from a modified description \(digest .*pass the plant Robot "
-                                             r"as plant="):
-            run_closed_loop(heavy, controller, task, t_final=0.01)
+        alone = run_closed_loop(heavy, controller, task, t_final=0.01)
         plant = plant_with_mismatch(robot, ModelMismatch(link_mass_scale=1.5))
     result = run_closed_loop(heavy, controller, task, plant=plant, t_final=0.01)
     assert result.t.size == 11
+    assert np.array_equal(alone.t, result.t)
+    for name in result.__dataclass_fields__:
+        a, b = getattr(alone, name), getattr(result, name)
+        if isinstance(a, np.ndarray) and a.dtype.kind == "f":
+            assert np.allclose(a, b, rtol=0, atol=1e-12), name
