@@ -23,6 +23,8 @@ _LAZY = {
     "validate_controller_fmu": "controller_fmu",
     "OnePeriodDelay": "master", "closed_loop_through_fmu": "master", "run_closed_loop": "master",
     "run_libcosim_closed_loop": "master",
+    "SingularInertiaError": "export_checks", "check_inertia": "export_checks",
+    "StickSlipResult": "reference", "simulate_stick_slip": "reference",
 }
 
 
@@ -35,6 +37,10 @@ def __getattr__(name: str) -> object:
 
 
 __all__ = [
+    "SingularInertiaError",
+    "StickSlipResult",
+    "check_inertia",
+    "simulate_stick_slip",
     "ControllerFmuReport",
     "OnePeriodDelay",
     "closed_loop_through_fmu",
