@@ -104,7 +104,7 @@ def test_state_round_trips_reproduce_the_run_bit_for_bit(scenario):
     _, _, profile, *_ = scenario
     rt = state_roundtrip(scara_fmu(), profile.at, TAU, STATES + TOOL, steps_before=300, steps_after=300)
     assert rt.get_set_identical and rt.deserialized_identical and rt.me_identical
-    assert rt.serialized_size == 128 + 8 * (8 + 4 + 25)
+    assert rt.serialized_size == 136 + 8 * (8 + 4 + 25 + 4)     # header, x, u, p, friction modes
 
 
 def test_directional_derivatives_match_finite_differences():
