@@ -226,21 +226,30 @@ def generate_sources(spec: ModelSpec, sources: Path, *, progress: Progress | Non
 # ------------------------------------------------------------------- internals
 
 def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
+    from .friction_modes import no_modes
+
     fid = spec.model_identifier
+    modes = spec.modes if spec.modes is not None else no_modes(spec.ode)
     x = ca.SX.sym("x", spec.ode.numel_in(0))
     u = ca.SX.sym("u", spec.ode.numel_in(1))
     p = ca.SX.sym("p", spec.ode.numel_in(2))
+    m = ca.SX.sym("m", modes.nz)
     dx, du, dp = ca.SX.sym("dx", x.numel()), ca.SX.sym("du", u.numel()), ca.SX.sym("dp", p.numel())
-    xdot = spec.ode(x, u, p)
+    xdot = modes.ode(x, u, p, m)
     y = spec.out(x, u, p)
     z, dz = ca.vertcat(x, u, p), ca.vertcat(dx, du, dp)
+    m_next, x_next = modes.update(x, u, p, m)
+    args, names = [x, u, p, m], ["x", "u", "p", "m"]
     functions = [
-        ca.Function(f"{fid}_ode", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"]),
-        ca.Function(f"{fid}_out", [x, u, p], [y], ["x", "u", "p"], ["y"]),
-        ca.Function(f"{fid}_ode_dir", [x, u, p, dx, du, dp], [ca.jtimes(xdot, z, dz)],
-                    ["x", "u", "p", "dx", "du", "dp"], ["dxdot"]),
-        ca.Function(f"{fid}_out_dir", [x, u, p, dx, du, dp], [ca.jtimes(y, z, dz)],
-                    ["x", "u", "p", "dx", "du", "dp"], ["dy"]),
+        ca.Function(f"{fid}_ode", args, [xdot], names, ["xdot"]),
+        ca.Function(f"{fid}_out", args, [y], names, ["y"]),
+        ca.Function(f"{fid}_ode_dir", args + [dx, du, dp], [ca.jtimes(xdot, z, dz)], names + ["dx", "du", "dp"],
+                    ["dxdot"]),
+        ca.Function(f"{fid}_out_dir", args + [dx, du, dp], [ca.jtimes(y, z, dz)], names + ["dx", "du", "dp"],
+                    ["dy"]),
+        ca.Function(f"{fid}_events", args, [modes.events(x, u, p, m)], names, ["z"]),
+        ca.Function(f"{fid}_update", args, [m_next, x_next], names, ["m_next", "x_next"]),
+        ca.Function(f"{fid}_start", [x, u, p], [modes.start(x, u, p)], ["x", "u", "p"], ["m"]),
     ]
     stamp = (f"/* {STAMP}: CasADi code of the model {fid} (ode, out and their forward-mode\n"
              f" * directional derivatives), written by fmu/build.py. The exported functions are\n"

@@ -1,28 +1,14 @@
 """Reference integrator of an arm with stick-slip Coulomb friction (Python, event-located).
 
-The friction law is that of a bearing with Coulomb friction (Modelica's
-``BearingFriction`` without a separate static level): each joint is in one of
-three modes,
-
-* sliding forward (``+1``): the joint-side Coulomb torque ``Tc+ = |G| Tc+_m`` acts;
-* sliding backward (``-1``): ``Tc- = |G| Tc-_m`` (<= 0) acts;
-* stuck (``0``): ``qd = 0`` and ``qdd = 0`` for that joint, and the friction torque
-  is whatever holds it, computed from the dynamics; it holds while
-  ``Tc- <= f <= Tc+``.
-
-With ``s`` the stuck mask, the accelerations of the free joints and the
-holding torques of the stuck ones come from one linear solve,
-``(B diag(1 - s) + diag(s)) v = tau - h(q, qd) - f_c``, with ``h`` the
-bias and viscous torques and ``f_c`` the Coulomb torques of the sliding
-joints: ``qdd = (1 - s) v`` and ``f = s v``.
-
-Mode switches are events, located by :func:`scipy.integrate.solve_ivp`: a
-sliding joint whose velocity reaches zero while decelerating sticks (its
-velocity is set to exactly 0); a stuck joint whose holding torque reaches a
-limit breaks loose in the direction of that torque. Joints without Coulomb
-friction never stick. Modes are made consistent at every event (a joint
-stuck by an event may at once break loose again, one joint at a time, the
-largest excess first).
+The law is the FMU's, stated in :mod:`fmu.friction_modes`: per joint a mode
+(sliding forward, sliding backward, stuck), the accelerations of the free
+joints and the holding torques of the stuck ones from one masked solve, event
+indicators positive while the modes hold, and the same mode update, repeated
+until nothing changes. Here it is written again with NumPy, and the events are
+located by :func:`scipy.integrate.solve_ivp` (DOP853), one hold interval of the
+piecewise-constant torque at a time: an independent integration of the same
+law, against which the FMU's RK4 (with bisection on the indicators) and the
+importers' integrators (CVode with root finding) are compared.
 """
 
 from __future__ import annotations
@@ -32,7 +18,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["StickSlipResult", "coulomb_limits", "mode_dynamics", "consistent_modes", "simulate_stick_slip"]
+from .friction_modes import A_EPS, F_EPS, V_EPS
+
+__all__ = ["StickSlipResult", "coulomb_limits", "mode_dynamics", "indicators", "update_modes", "settle_modes",
+           "start_modes", "simulate_stick_slip"]
 
 
 @dataclass(frozen=True)
@@ -58,7 +47,7 @@ def coulomb_limits(robot: Any) -> tuple[np.ndarray, np.ndarray]:
 def mode_dynamics(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray,
                   modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Accelerations ``qdd`` (0 for stuck joints) and friction ``f`` (Coulomb of sliding joints, holding
-    torque of stuck ones) under ``modes``; ``r = tau - h(q, qd)`` without Coulomb friction."""
+    torque of stuck ones) under ``modes``; ``r = G u - h(q, qd)`` without Coulomb friction."""
     s = (modes == 0).astype(float)
     f_c = np.where(modes > 0, tc_pos, np.where(modes < 0, tc_neg, 0.0))
     A = B * (1.0 - s)[None, :] + np.diag(s)
@@ -66,31 +55,51 @@ def mode_dynamics(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.n
     return (1.0 - s) * v, np.where(s > 0, v, f_c)
 
 
-def consistent_modes(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray,
-                     modes: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """Modes after an event: stuck joints whose holding torque exceeds a limit break loose, one at a time.
+def indicators(qd: np.ndarray, f: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray,
+               modes: np.ndarray) -> np.ndarray:
+    """Event indicators, positive while the modes hold (see :mod:`fmu.friction_modes`)."""
+    sliding = modes * qd + V_EPS
+    stuck = np.minimum(tc_pos - f, f - tc_neg) + F_EPS * (tc_pos - tc_neg)
+    return np.where(tc_pos - tc_neg > 0, np.where(modes != 0, sliding, stuck), 1.0)
 
-    A joint at rest (``qd = 0``) set sliding whose acceleration points the other way is stuck
-    instead; joints without Coulomb friction are never stuck.
+
+def update_modes(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray, modes: np.ndarray,
+                 qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One pass of the mode update: ``(modes, qd)`` next (see :mod:`fmu.friction_modes`)."""
+    qdd, f = mode_dynamics(B, r, tc_pos, tc_neg, modes)
+    has_c = tc_pos - tc_neg > 0
+    a_tol = A_EPS * (1.0 + np.max(np.abs(qdd)))
+    stick = has_c & (modes != 0) & (modes * qd <= V_EPS) & (modes * qdd < -a_tol)
+    nxt = modes.copy()
+    if np.any(stick):
+        nxt[stick] = 0
+    else:
+        excess = np.where(modes == 0, np.maximum(f - tc_pos, tc_neg - f), -1e300)
+        i = int(np.argmax(excess))            # the first of equal largest excesses, as the FMU
+        if excess[i] > 0:
+            nxt[i] = 1 if f[i] > tc_pos[i] else -1
+    return nxt, np.where(nxt == 0, 0.0, qd)
+
+
+def settle_modes(B_r: Any, tc_pos: np.ndarray, tc_neg: np.ndarray, modes: np.ndarray,
+                 x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Repeat :func:`update_modes` until nothing changes (at most ``2 n + 2`` passes, as the FMU).
+
+    ``B_r(x)`` returns ``(B, r)`` at state ``x``.
     """
-    modes = modes.copy()
-    free_of_coulomb = (tc_pos == 0) & (tc_neg == 0)
-    modes[free_of_coulomb & (modes == 0)] = 1
-    for _ in range(2 * modes.size + 1):
-        qdd, f = mode_dynamics(B, r, tc_pos, tc_neg, modes)
-        excess = np.where(modes == 0, np.maximum(f - tc_pos, tc_neg - f), -np.inf)
-        # decelerating from rest, beyond rounding: a joint just set sliding that would move the other way
-        wrong_way = ((modes != 0) & (qd == 0) & (modes * qdd < -1e-9 * (1.0 + np.max(np.abs(qdd))))
-                     & ~free_of_coulomb)
-        if np.any(wrong_way):
-            modes[np.flatnonzero(wrong_way)[0]] = 0
-            continue
-        if np.max(excess, initial=-np.inf) > 0:
-            i = int(np.argmax(excess))
-            modes[i] = 1 if f[i] > tc_pos[i] else -1
-            continue
-        return modes
-    raise RuntimeError(f"consistent_modes: no consistent friction modes found (last {modes.tolist()})")
+    n = modes.size
+    for _ in range(2 * n + 2):
+        B, r = B_r(x)
+        nxt, qd = update_modes(B, r, tc_pos, tc_neg, modes, x[n:])
+        if np.array_equal(nxt, modes) and np.array_equal(qd, x[n:]):
+            return modes, x
+        modes, x = nxt, np.concatenate([x[:n], qd])
+    raise RuntimeError(f"settle_modes: the friction modes did not settle (last {modes.tolist()})")
+
+
+def start_modes(qd: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray) -> np.ndarray:
+    """The modes to begin from: the sign of the velocity (joints without Coulomb friction: never 0)."""
+    return np.where(tc_pos - tc_neg > 0, np.sign(qd), np.where(qd < 0, -1.0, 1.0))
 
 
 def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, *, rtol: float = 1e-10,
@@ -130,10 +139,12 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
     def viscous(qd: np.ndarray) -> np.ndarray:
         return smooth.friction(qd)
 
-    modes = np.where(x[n:] > 0, 1, np.where(x[n:] < 0, -1, 0))
-    B, r = parts(x, G * profile.tau_m[0])
-    modes = consistent_modes(B, r, tc_pos, tc_neg, modes, x[n:])
-    ts, Xs, Fs, Ms, events = [], [], [], [], []
+    def B_r(xv: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return parts(xv, tau)
+
+    modes = start_modes(x[n:], tc_pos, tc_neg)
+    ts: list[float] = []
+    Xs, Fs, Ms, events = [], [], [], []
     bounds = np.append(profile.t_switch, profile.t_end)
 
     def record(t: float, xv: np.ndarray, tau: np.ndarray, m: np.ndarray) -> None:
@@ -141,14 +152,13 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
         _, f = mode_dynamics(B_, r_, tc_pos, tc_neg, m)
         ts.append(t)
         Xs.append(xv.copy())
-        Fs.append(f + viscous(xv[n:]))
+        Fs.append(np.where(m == 0, f, f + viscous(xv[n:])))
         Ms.append(m.copy())
 
     for k in range(profile.t_switch.size):
         tau = G * profile.tau_m[k]
         t0, t1 = float(bounds[k]), float(bounds[k + 1])
-        B, r = parts(x, tau)
-        modes = consistent_modes(B, r, tc_pos, tc_neg, modes, np.where(modes == 0, 0.0, x[n:]))
+        modes, x = settle_modes(lambda xv, tau=tau: B_r(xv, tau), tc_pos, tc_neg, modes, x)
         t_eval = np.linspace(t0, t1, samples_per_hold + 1)
         while True:
             m = modes.copy()
@@ -156,20 +166,15 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
             def rhs(_t: float, xv: np.ndarray, m: np.ndarray = m) -> np.ndarray:
                 B_, r_ = parts(xv, tau)
                 qdd, _ = mode_dynamics(B_, r_, tc_pos, tc_neg, m)
-                qd = np.where(m == 0, 0.0, xv[n:])
-                return np.concatenate([qd, qdd])
+                return np.concatenate([np.where(m == 0, 0.0, xv[n:]), qdd])
 
             def indicator(i: int):
                 def z(_t: float, xv: np.ndarray, m: np.ndarray = m) -> float:
-                    if tc_pos[i] == 0 and tc_neg[i] == 0:
-                        return 1.0
-                    if m[i] != 0:
-                        return float(xv[n + i])
                     B_, r_ = parts(xv, tau)
                     _, f = mode_dynamics(B_, r_, tc_pos, tc_neg, m)
-                    return float(min(tc_pos[i] - f[i], f[i] - tc_neg[i]))
+                    return float(indicators(xv[n:], f, tc_pos, tc_neg, m)[i])
                 z.terminal = True
-                z.direction = -1.0 if m[i] >= 0 else 1.0
+                z.direction = -1.0
                 return z
 
             sol = solve_ivp(rhs, (t0, t1), x, method="DOP853", rtol=rtol, atol=atol,
@@ -182,19 +187,10 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
             if sol.status == 0:
                 x = sol.y[:, -1]
                 break
-            te = float(sol.t_events[[len(e) > 0 for e in sol.t_events].index(True)][0])
-            x = sol.y_events[[len(e) > 0 for e in sol.t_events].index(True)][0].copy()
-            fired = [i for i, e in enumerate(sol.t_events) if len(e) > 0]
-            for i in fired:
-                if m[i] != 0:
-                    modes[i] = 0                       # velocity reached zero: stick
-                    x[n + i] = 0.0
-                else:
-                    B_, r_ = parts(x, tau)
-                    _, f = mode_dynamics(B_, r_, tc_pos, tc_neg, m)
-                    modes[i] = 1 if f[i] > 0.5 * (tc_pos[i] + tc_neg[i]) else -1   # break loose
-            B, r = parts(x, tau)
-            modes = consistent_modes(B, r, tc_pos, tc_neg, modes, np.where(modes == 0, 0.0, x[n:]))
+            first = [len(e) > 0 for e in sol.t_events].index(True)
+            te = float(sol.t_events[first][0])
+            x = sol.y_events[first][0].copy()
+            modes, x = settle_modes(lambda xv, tau=tau: B_r(xv, tau), tc_pos, tc_neg, modes, x)
             events.append(te)
             if len(events) > 4 * n and events[-4 * n] == te:
                 raise RuntimeError(f"simulate_stick_slip: {4 * n} events at t = {te} without progress")

@@ -34,6 +34,7 @@ __all__ = [
     "DIVERGENCE_GAIN",
     "Check",
     "divergence_horizon",
+    "reference_states",
     "TorqueProfile",
     "TrackingError",
     "RoundTrip",
@@ -320,7 +321,8 @@ def _scale(x: float) -> float:
 def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_ref: np.ndarray,
                    X_ref: np.ndarray, P_ref: np.ndarray) -> TrackingError:
     """Compare states ``X`` and tool positions ``P`` sampled at ``t`` with the reference at ``t_ref``."""
-    idx = [int(np.argmin(np.abs(t - tr))) for tr in t_ref]
+    # the last sample at each time: Model Exchange results repeat the time of an event (before, after)
+    idx = [t.size - 1 - int(np.argmin(np.abs(t[::-1] - tr))) for tr in t_ref]
     if np.max(np.abs(t[idx] - t_ref)) > 1e-9:
         raise ValueError("tracking_error: the run does not sample every reference time")
     n = X.shape[1] // 2
@@ -333,19 +335,36 @@ def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_re
                          float(dP.max()), q_scale, qd_scale, p_scale)
 
 
-def divergence_horizon(plant: Any, profile: TorqueProfile, X_ref: np.ndarray, p: np.ndarray | None = None,
+def reference_states(robot: Any, plant: Any, profile: TorqueProfile, x0: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """The Python model's states at the switching times of ``profile`` and at its end.
+
+    With Coulomb friction, the stick-slip law of the FMU integrated by :mod:`fmu.reference`
+    (events located by solve_ivp); without, :func:`reference_response` (the same law then).
+    """
+    from .reference import coulomb_limits, simulate_stick_slip
+
+    tc_pos, tc_neg = coulomb_limits(robot)
+    if not np.any(tc_pos - tc_neg > 0):
+        return reference_response(plant, profile, x0=x0)
+    res = simulate_stick_slip(robot, profile, x0=x0, rtol=1e-11, atol=1e-12, samples_per_hold=1)
+    return res.t, res.X
+
+
+def divergence_horizon(robot: Any, plant: Any, profile: TorqueProfile, X_ref: np.ndarray,
                        delta: float = 1e-6) -> float:
     """Time (s, a switching time of ``profile``) until which the open-loop arm amplifies a perturbation
-    of its initial velocities at most :data:`DIVERGENCE_GAIN` times.
+    of its initial joint positions at most :data:`DIVERGENCE_GAIN` times.
 
-    The reference is integrated again from ``x0 + delta`` on every velocity (rad/s or m/s) and
-    compared with ``X_ref``; the horizon is the last switching time before the difference exceeds
-    ``DIVERGENCE_GAIN * delta`` (the whole profile if it never does).
+    The reference is integrated again from ``x0 + delta`` on every position (rad or m; positions,
+    so that joints at rest stay at rest and stuck) and compared with ``X_ref``; the horizon is the
+    last switching time before the difference exceeds ``DIVERGENCE_GAIN * delta`` (the whole
+    profile if it never does).
     """
     n = X_ref.shape[1] // 2
     x0 = X_ref[0].copy()
-    x0[n:] += delta
-    t, X = reference_response(plant, profile, p=p, x0=x0)
+    x0[:n] += delta
+    t, X = reference_states(robot, plant, profile, x0=x0)
     gain = np.max(np.abs(X - X_ref), axis=1) / delta
     beyond = np.flatnonzero(gain > DIVERGENCE_GAIN)
     return float(t[-1] if beyond.size == 0 else t[max(int(beyond[0]) - 1, 0)])
@@ -717,23 +736,18 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     plant = build_plant(robot)
     p_ref = np.array(plant.param_defaults, dtype=float)
     start: dict[str, float] = {}
-    coulomb = [i for i, name in enumerate(plant.param_names) if name.startswith("coulomb_friction")]
-    if np.any(p_ref[coulomb] != 0.0):
-        # Coulomb friction switches at qd = 0; where the open-loop arm sticks, a tight-tolerance
-        # reference chatters without end. The comparison runs without it, in all three models.
-        p_ref[coulomb] = 0.0
-        start = {plant.param_names[i]: 0.0 for i in coulomb}
-        robot = robot.with_parameters(robot.parameters.with_friction(coulomb_pos=np.zeros(n),
-                                                                     coulomb_neg=np.zeros(n)))
-        report.notes.append("Coulomb friction set to 0 for the comparison (a switch at qd = 0: an open-loop arm "
-                            "that sticks makes a tight-tolerance reference chatter)")
+    from .reference import coulomb_limits
+
+    if np.any(np.subtract(*coulomb_limits(robot)) > 0):
+        report.notes.append("Coulomb friction with stick-slip: the reference is fmu.reference (the same law, "
+                            "events located by solve_ivp)")
     _say(progress, f"computed-torque feed-forward over {t_end:g} s")
     profile = feedforward_profile(robot, t_end=t_end)
     report.profile = profile.description
     _say(progress, "reference: the Python plant with solve_ivp (DOP853, rtol 1e-11)")
-    t_ref, X_ref = reference_response(plant, profile, p=p_ref)
-    _say(progress, "divergence horizon: the reference again from a state perturbed by 1e-6")
-    horizon = divergence_horizon(plant, profile, X_ref, p=p_ref)
+    t_ref, X_ref = reference_states(robot, plant, profile)
+    _say(progress, "divergence horizon: the reference again from positions perturbed by 1e-6")
+    horizon = divergence_horizon(robot, plant, profile, X_ref)
     keep = t_ref <= horizon + 1e-12
     if keep.sum() < 2:
         keep[:2] = True

@@ -123,6 +123,7 @@ class ModelSpec:
     motor_model: str = ""
     robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
     robot_json: str = ""    # the whole description (fmu.robot_resource), shipped as resources/robot.json
+    modes: Any = None       # fmu.friction_modes.FrictionModes of the stick-slip friction, or None (no modes)
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
@@ -220,6 +221,7 @@ class VariableTable:
             "source_files": files,
             "unit_definitions": self._unit_definitions(),
             "stop_time": _xml_number(spec.stop_time),
+            "event_indicators": str(spec.modes.nz if spec.modes is not None else 0),
             "step_size": _xml_number(spec.step),
             "vendor_annotations": self._vendor_annotations(),
             "model_variables": "\n".join(self._scalar_variable(v) for v in self.variables),
@@ -238,6 +240,7 @@ class VariableTable:
             guid=_c_string(guid),
             model_identifier_string=_c_string(spec.model_identifier),
             nx=len(spec.states), nu=len(spec.inputs), np=len(spec.params), ny=len(spec.outputs),
+            nz=spec.modes.nz if spec.modes is not None else 0,
             nvars=len(self.variables),
             value_references=macros,
         )
@@ -264,6 +267,7 @@ class VariableTable:
             p_start=_c_array(spec.p_start),
             step_start=_c_number(spec.step),
             ode=f"{fid}_ode", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
+            events=f"{fid}_events", update=f"{fid}_update", start=f"{fid}_start",
         )
 
     def _robot_annotation_attrs(self) -> str:
@@ -514,6 +518,8 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
     y_probe = np.asarray(out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
     if not np.array_equal(y_probe[:2 * n], x_probe):
         raise ValueError("plant.out: expected the first 2n outputs to be the state [q; qd] itself")
+    from .friction_modes import friction_modes
+
     identifier = model_identifier or robot.description.identifier
     if identifier[0].isdigit():
         identifier = "m_" + identifier
@@ -532,6 +538,7 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
         motor_model=robot.motor_model,
         robot_digest=robot_digest,
         robot_json=robot_json,
+        modes=friction_modes(robot, tuple(plant.param_names)),
     )
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from model import InertiaConsistencyWarning
 
-__all__ = ["build_root", "scara_fmu", "trivial_fmu", "planar2r_full_fmu", "heavy_scara_fmu", "scara_dir",
+__all__ = ["build_root", "scara_fmu", "trivial_fmu", "planar2r_full_fmu", "heavy_scara_fmu", "puma_fmu", "scara_dir",
            "LogRecorder", "Harness", "make_callbacks"]
 
 
@@ -70,6 +70,14 @@ def heavy_scara_fmu() -> Path:
     robot = _quiet(load_robot, "scara")
     heavy = _quiet(plant_with_mismatch, robot, ModelMismatch(link_mass_scale=1.5))
     return _quiet(export_fmu, heavy, build_root() / "scara_heavy.fmu")
+
+
+@lru_cache(maxsize=None)
+def puma_fmu() -> Path:
+    """The Puma 560 FMU (reflected motors, its Coulomb friction: stick-slip modes)."""
+    from fmu import export_fmu
+
+    return _quiet(export_fmu, "puma560", build_root() / "puma560.fmu")
 
 
 @lru_cache(maxsize=None)

@@ -459,7 +459,7 @@ def test_deserialise_the_state_of_another_model(cs):
 def test_deserialise_non_finite_values(cs):
     state = cs.fmu.getFMUstate()
     data = bytearray(cs.fmu.serializeFMUstate(state))
-    data[128:136] = np.array([np.nan]).tobytes()
+    data[136:144] = np.array([np.nan]).tobytes()       # x[0]: the values follow the 136-byte header
     assert status_of(cs.fmu.deSerializeFMUstate, bytes(data)) == fmi2Error
     assert_logged(cs, fmi2Error, "logStatusError", "the recorded values are not finite")
     cs.fmu.freeFMUstate(state)
@@ -536,7 +536,7 @@ def test_co_simulation_state_into_a_model_exchange_instance(cs, me):
 def test_event_indicators_of_the_wrong_size(me):
     z = (fmi2Real * 1)()
     assert status_of(me.fmu.fmi2GetEventIndicators, me.c, z, 1) == fmi2Error
-    assert_logged(me, fmi2Error, "logStatusError", "fmi2GetEventIndicators: ni is 1, the model has 0")
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2GetEventIndicators: ni is 1, the model has 4")   # one friction mode per joint
 
 
 def test_continuous_states_of_the_wrong_size(me):

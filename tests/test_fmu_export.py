@@ -273,7 +273,9 @@ def test_export_outside_linux_is_refused_with_a_clear_error(system, tmp_path, mo
     assert not any(tmp_path.iterdir())
 
 
-def test_the_description_digest_is_recorded_and_a_modified_robot_is_not_reloaded():
+def test_the_description_digest_is_recorded_and_a_modified_robot_is_reloaded_from_the_fmu(tmp_path):
+    """The mass-scaled SCARA keeps the name scara: its FMU's own description is reloaded (digest checked); an
+    FMU without the embedded description (an older export) falls back on the built-in name and is refused."""
     from fmu.validate import fmu_robot_digest, reload_fmu_robot
 
     with warnings.catch_warnings():
@@ -283,8 +285,14 @@ def test_the_description_digest_is_recorded_and_a_modified_robot_is_not_reloaded
         assert reload_fmu_robot(scara_fmu()).description.digest() == scara.description.digest()
         digest = fmu_robot_digest(heavy_scara_fmu())
         assert digest is not None and digest != scara.description.digest()
+        assert reload_fmu_robot(heavy_scara_fmu()).description.digest() == digest
+        stripped = tmp_path / "no_resource.fmu"
+        with zipfile.ZipFile(heavy_scara_fmu()) as src, zipfile.ZipFile(stripped, "w") as dst:
+            for item in src.infolist():
+                if item.filename != "resources/robot.json":
+                    dst.writestr(item, src.read(item.filename))
         with pytest.raises(ValueError, match=rf"the FMU was built from a modified description \(digest {digest[:12]}"):
-            reload_fmu_robot(heavy_scara_fmu())
+            reload_fmu_robot(stripped)
     assert fmu_robot_digest(trivial_fmu()) is None
 
 

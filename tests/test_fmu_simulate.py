@@ -104,7 +104,7 @@ def test_state_round_trips_reproduce_the_run_bit_for_bit(scenario):
     _, _, profile, *_ = scenario
     rt = state_roundtrip(scara_fmu(), profile.at, TAU, STATES + TOOL, steps_before=300, steps_after=300)
     assert rt.get_set_identical and rt.deserialized_identical and rt.me_identical
-    assert rt.serialized_size == 128 + 8 * (8 + 4 + 25)
+    assert rt.serialized_size == 136 + 8 * (8 + 4 + 25 + 4)     # header, x, u, p, friction modes
 
 
 def test_directional_derivatives_match_finite_differences():
@@ -179,7 +179,7 @@ def test_validate_flags_a_wrong_model(scenario, monkeypatch):
 
 
 def test_validate_a_robot_from_a_file_with_coulomb_friction(tmp_path):
-    """A TOML robot with Coulomb friction, validated from the FMU alone: the comparison runs without it, and passes."""
+    """A TOML robot with Coulomb friction, validated from the FMU alone against the stick-slip reference."""
     from fmu import export_fmu
     from fmu.validate import fmu_robot
     from model.description import BUILTIN_DIR
@@ -194,7 +194,7 @@ def test_validate_a_robot_from_a_file_with_coulomb_friction(tmp_path):
     report = validate_fmu(path, t_end=1.0)
     print(report.format())
     assert report.ok, report.problems()
-    assert any("Coulomb friction set to 0" in note for note in report.notes)
+    assert any("Coulomb friction with stick-slip" in note for note in report.notes)
     assert "quintic from rest" in report.profile
 
 

@@ -21,7 +21,7 @@ import fmu
 from fmu.validate import DIVERGENCE_GAIN, TOLERANCES, validate_fmu
 from model import InertiaConsistencyWarning
 
-from fmu_support import build_root
+from fmu_support import build_root, puma_fmu
 
 ARM7_TOML = """
 name = "arm7"
@@ -62,13 +62,6 @@ def arm7_fmu() -> tuple[Path, Path]:
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
         path = fmu.export_fmu(str(toml), build_root() / "arm7.fmu")
     return path, toml
-
-
-@lru_cache(maxsize=None)
-def puma_fmu() -> Path:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", InertiaConsistencyWarning)
-        return fmu.export_fmu("puma560", build_root() / "puma560.fmu")
 
 
 def _assert_valid(report) -> None:

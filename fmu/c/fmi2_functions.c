@@ -228,8 +228,13 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    int modes;
     ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
     mw_invalidate(inst);
+    modes = mw_start_modes(inst);
+    if (modes != 0)
+        return fail(inst, "fmi2ExitInitializationMode", modes == -1 ? "the model failed to compute the friction modes"
+                                                                    : "the initial friction modes did not settle");
     if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
         return fail(inst, "fmi2ExitInitializationMode", "the initial state and parameters give non-finite derivatives");
     inst->mode = inst->type == fmi2ModelExchange ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
@@ -551,12 +556,18 @@ fmi2Status fmi2EnterEventMode(fmi2Component c) {
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
+    int changed, x_changed, status;
     ENTER(NewDiscreteStates, FOR_ME, MODES_NewDiscreteStates);
     if (null_arg(inst, "fmi2NewDiscreteStates", "eventInfo", eventInfo)) return fmi2Error;
+    /* the friction modes follow the state, inputs and parameters: a joint sticks or breaks loose */
+    status = mw_settle_modes(inst, &changed, &x_changed);
+    if (status != 0)
+        return fail(inst, "fmi2NewDiscreteStates", status == -1 ? "the model failed to update the friction modes"
+                                                                 : "the friction modes did not settle");
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
-    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = x_changed ? fmi2True : fmi2False;
     eventInfo->nextEventTimeDefined = fmi2False;
     eventInfo->nextEventTime = 0.0;
     return fmi2OK;
@@ -640,10 +651,13 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    const char *fn = "fmi2GetEventIndicators";
     ENTER(GetEventIndicators, FOR_ME, MODES_GetEventIndicators);
-    (void)eventIndicators;
-    if (wrong_size(inst, "fmi2GetEventIndicators", "ni", ni, 0)) return fmi2Error;
-    return fmi2OK;
+    if (wrong_size(inst, fn, "ni", ni, inst->model->nz)) return fmi2Error;
+    if (ni == 0) return fmi2OK;
+    if (null_arg(inst, fn, "eventIndicators[]", eventIndicators)) return fmi2Error;
+    if (mw_events(inst, inst->x, eventIndicators) != 0) return fail(inst, fn, "the model failed to evaluate");
+    return non_finite(inst, fn, "the event indicators", eventIndicators, ni);
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {

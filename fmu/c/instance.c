@@ -30,15 +30,18 @@ static int work_sizes(const MwFunction *f, mw_int *sz_arg, mw_int *sz_res, mw_in
 MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name,
                             const fmi2CallbackFunctions *cb, fmi2Boolean logging_on) {
     MwInstance *inst;
-    mw_int sz_arg = 6, sz_res = 2, sz_iw = 0, sz_w = 0;
-    size_t nx = model->nx, nu = model->nu, np = model->np, ny = model->ny;
+    mw_int sz_arg = 7, sz_res = 2, sz_iw = 0, sz_w = 0;
+    size_t nx = model->nx, nu = model->nu, np = model->np, ny = model->ny, nz = model->nz;
     size_t n_doubles, name_len;
     double *d;
 
     if (work_sizes(&model->ode, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
+        work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->events, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->update, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
         return NULL;
     }
     if (sz_arg < 0 || sz_res < 0 || sz_iw < 0 || sz_w < 0) return NULL;
@@ -52,8 +55,8 @@ MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name
 
     name_len = strlen(name);
     inst->name = (char *)cb->allocateMemory(name_len + 1, sizeof(char));
-    /* x, u, p, xdot, y; x_save, x_stage, k1..k4; dx, du, dp, dxdot, dy; w */
-    n_doubles = (nx + nu + np + nx + ny) + 6 * nx + (nx + nu + np + nx + ny) + (size_t)sz_w;
+    /* x, u, p, m, xdot, y; x_save, x_stage, k1..k4; m_save, z0, z1, next; dx, du, dp, dxdot, dy; w */
+    n_doubles = (nx + nu + np + nz + nx + ny) + 6 * nx + (4 * nz + nx) + (nx + nu + np + nx + ny) + (size_t)sz_w;
     inst->block = (double *)cb->allocateMemory(at_least_one(n_doubles), sizeof(double));
     inst->arg = (const double **)cb->allocateMemory((size_t)sz_arg, sizeof(const double *));
     inst->res = (double **)cb->allocateMemory((size_t)sz_res, sizeof(double *));
@@ -68,6 +71,7 @@ MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name
     inst->x = d; d += nx;
     inst->u = d; d += nu;
     inst->p = d; d += np;
+    inst->m = d; d += nz;
     inst->xdot = d; d += nx;
     inst->y = d; d += ny;
     inst->x_save = d; d += nx;
@@ -76,6 +80,10 @@ MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name
     inst->k2 = d; d += nx;
     inst->k3 = d; d += nx;
     inst->k4 = d; d += nx;
+    inst->m_save = d; d += nz;
+    inst->z0 = d; d += nz;
+    inst->z1 = d; d += nz;
+    inst->next = d; d += nz + nx;
     inst->dx = d; d += nx;
     inst->du = d; d += nu;
     inst->dp = d; d += np;
@@ -114,6 +122,7 @@ void mw_set_start_values(MwInstance *inst) {
     if (m->nx > 0) memcpy(inst->x, m->x_start, m->nx * sizeof(double));
     if (m->nu > 0) memcpy(inst->u, m->u_start, m->nu * sizeof(double));
     if (m->np > 0) memcpy(inst->p, m->p_start, m->np * sizeof(double));
+    if (m->nz > 0) memset(inst->m, 0, m->nz * sizeof(double));
     inst->h_int = m->step_start;
     inst->time = 0.0;
     inst->last_successful_time = 0.0;
@@ -195,10 +204,15 @@ int mw_all_finite(const double *v, size_t n) {
     return 1;
 }
 
-static int eval_ode(MwInstance *inst, const double *x, double *xdot) {
+static void set_args(MwInstance *inst, const double *x) {
     inst->arg[0] = x;
     inst->arg[1] = inst->u;
     inst->arg[2] = inst->p;
+    inst->arg[3] = inst->m;
+}
+
+static int eval_ode(MwInstance *inst, const double *x, double *xdot) {
+    set_args(inst, x);
     inst->res[0] = xdot;
     return inst->model->ode.eval(inst->arg, inst->res, inst->iw, inst->w, 0) == 0 ? 0 : -1;
 }
@@ -212,9 +226,7 @@ int mw_update_derivatives(MwInstance *inst) {
 
 int mw_update_outputs(MwInstance *inst) {
     if (inst->y_valid) return 0;
-    inst->arg[0] = inst->x;
-    inst->arg[1] = inst->u;
-    inst->arg[2] = inst->p;
+    set_args(inst, inst->x);
     inst->res[0] = inst->y;
     if (inst->model->out.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
     inst->y_valid = 1;
@@ -223,12 +235,10 @@ int mw_update_outputs(MwInstance *inst) {
 
 int mw_directional(MwInstance *inst, int need_dxdot, int need_dy) {
     const MwModel *m = inst->model;
-    inst->arg[0] = inst->x;
-    inst->arg[1] = inst->u;
-    inst->arg[2] = inst->p;
-    inst->arg[3] = inst->dx;
-    inst->arg[4] = inst->du;
-    inst->arg[5] = inst->dp;
+    set_args(inst, inst->x);
+    inst->arg[4] = inst->dx;
+    inst->arg[5] = inst->du;
+    inst->arg[6] = inst->dp;
     if (need_dxdot) {
         inst->res[0] = inst->dxdot;
         if (m->ode_dir.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
@@ -238,6 +248,50 @@ int mw_directional(MwInstance *inst, int need_dxdot, int need_dy) {
         if (m->out_dir.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
     }
     return 0;
+}
+
+/* ------------------------------------------------------------------ modes */
+
+int mw_events(MwInstance *inst, const double *x, double *z) {
+    if (inst->model->nz == 0) return 0;
+    set_args(inst, x);
+    inst->res[0] = z;
+    return inst->model->events.eval(inst->arg, inst->res, inst->iw, inst->w, 0) == 0 ? 0 : -1;
+}
+
+int mw_settle_modes(MwInstance *inst, int *changed, int *x_changed) {
+    const size_t nx = inst->model->nx, nz = inst->model->nz;
+    size_t pass;
+    *changed = 0;
+    *x_changed = 0;
+    if (nz == 0) return 0;
+    for (pass = 0; pass < 2 * nz + 2; pass++) {
+        set_args(inst, inst->x);
+        inst->res[0] = inst->next;
+        inst->res[1] = inst->next + nz;
+        if (inst->model->update.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+        if (memcmp(inst->next, inst->m, nz * sizeof(double)) == 0 &&
+            memcmp(inst->next + nz, inst->x, nx * sizeof(double)) == 0)
+            return 0;
+        if (memcmp(inst->next + nz, inst->x, nx * sizeof(double)) != 0) *x_changed = 1;
+        memcpy(inst->m, inst->next, nz * sizeof(double));
+        memcpy(inst->x, inst->next + nz, nx * sizeof(double));
+        *changed = 1;
+        mw_invalidate(inst);
+    }
+    return -2;
+}
+
+int mw_start_modes(MwInstance *inst) {
+    int changed, x_changed;
+    if (inst->model->nz == 0) return 0;
+    inst->arg[0] = inst->x;
+    inst->arg[1] = inst->u;
+    inst->arg[2] = inst->p;
+    inst->res[0] = inst->m;
+    if (inst->model->start.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+    mw_invalidate(inst);
+    return mw_settle_modes(inst, &changed, &x_changed);
 }
 
 /* -------------------------------------------------------------- integrator */
@@ -272,24 +326,80 @@ unsigned long long mw_substeps(double h, double h_int) {
     return (unsigned long long)n_real;
 }
 
+/* Whether an indicator went from positive to not positive. */
+static int crossed(const double *z0, const double *z1, size_t nz) {
+    size_t i;
+    for (i = 0; i < nz; i++) {
+        if (z0[i] > 0.0 && !(z1[i] > 0.0)) return 1;
+    }
+    return 0;
+}
+
+/*
+ * One sub-step of length hs from inst->x with event location: an RK4 step; if an event
+ * indicator crossed zero, bisection on the step length finds the first crossing (to a
+ * relative 1e-12 of hs), the modes are updated there and the rest of the sub-step is
+ * taken the same way. 0 on success, -1 if the model failed or the state is not finite,
+ * -2 if the modes did not settle, -3 if events did not stop (more than 64 in one sub-step).
+ */
+static int substep(MwInstance *inst, double hs) {
+    const size_t nx = inst->model->nx, nz = inst->model->nz;
+    double remaining = hs;
+    int events = 0;
+    while (remaining > 0.0) {
+        double lo = 0.0, hi = 1.0;
+        int it, changed, x_changed, status;
+        if (nz == 0) return rk4_step(inst, remaining) == 0 && mw_all_finite(inst->x, nx) ? 0 : -1;
+        if (mw_events(inst, inst->x, inst->z0) != 0) return -1;
+        memcpy(inst->next + nz, inst->x, nx * sizeof(double)); /* the start of this piece */
+        if (rk4_step(inst, remaining) != 0 || !mw_all_finite(inst->x, nx)) return -1;
+        if (mw_events(inst, inst->x, inst->z1) != 0) return -1;
+        if (!crossed(inst->z0, inst->z1, nz)) return 0;
+        for (it = 0; it < 60 && (hi - lo) > 1e-12; it++) {
+            double mid = 0.5 * (lo + hi);
+            memcpy(inst->x, inst->next + nz, nx * sizeof(double));
+            if (rk4_step(inst, mid * remaining) != 0 || !mw_all_finite(inst->x, nx)) return -1;
+            if (mw_events(inst, inst->x, inst->z1) != 0) return -1;
+            if (crossed(inst->z0, inst->z1, nz)) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        memcpy(inst->x, inst->next + nz, nx * sizeof(double));
+        if (rk4_step(inst, hi * remaining) != 0 || !mw_all_finite(inst->x, nx)) return -1;
+        status = mw_settle_modes(inst, &changed, &x_changed);
+        if (status != 0) return status;
+        remaining -= hi * remaining;
+        if (++events > 64) return -3;
+    }
+    return 0;
+}
+
 fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long n) {
-    const size_t nx = inst->model->nx;
+    const size_t nx = inst->model->nx, nz = inst->model->nz;
     const double hs = h / (double)n;
     unsigned long long k;
+    int changed, x_changed, status;
 
     if (nx > 0) memcpy(inst->x_save, inst->x, nx * sizeof(double));
+    if (nz > 0) memcpy(inst->m_save, inst->m, nz * sizeof(double));
     mw_invalidate(inst);
-    for (k = 0; k < n; k++) {
-        if (rk4_step(inst, hs) != 0 || !mw_all_finite(inst->x, nx)) {
-            if (nx > 0) memcpy(inst->x, inst->x_save, nx * sizeof(double));
-            mw_invalidate(inst);
-            inst->last_successful_time = tc;
-            mw_log(inst, fmi2Discard, MW_LOG_DISCARD,
-                   "fmi2DoStep: the state became non-finite in sub-step %llu of %llu at t = %.17g; "
-                   "the state at the communication point %.17g is kept",
-                   k + 1, n, tc + (double)k * hs, tc);
-            return fmi2Discard;
-        }
+    /* inputs or parameters may have changed since the last step: the modes follow them first */
+    status = mw_settle_modes(inst, &changed, &x_changed);
+    for (k = 0; k < n && status == 0; k++) status = substep(inst, hs);
+    if (status != 0) {
+        if (nx > 0) memcpy(inst->x, inst->x_save, nx * sizeof(double));
+        if (nz > 0) memcpy(inst->m, inst->m_save, nz * sizeof(double));
+        mw_invalidate(inst);
+        inst->last_successful_time = tc;
+        mw_log(inst, fmi2Discard, MW_LOG_DISCARD,
+               "fmi2DoStep: %s in sub-step %llu of %llu at t = %.17g; the state at the communication point "
+               "%.17g is kept",
+               status == -1 ? "the state became non-finite" :
+               status == -2 ? "the friction modes did not settle" : "more than 64 friction events",
+               k, n, tc + (double)(k > 0 ? k - 1 : 0) * hs, tc);
+        return fmi2Discard;
     }
     inst->time = tc + h;
     inst->last_successful_time = inst->time;
@@ -300,7 +410,7 @@ fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long 
 
 MwSnapshot *mw_snapshot_new(MwInstance *inst) {
     const MwModel *m = inst->model;
-    size_t nv = m->nx + m->nu + m->np;
+    size_t nv = m->nx + m->nu + m->np + m->nz;
     MwSnapshot *snap = (MwSnapshot *)inst->cb.allocateMemory(1, sizeof(MwSnapshot) + nv * sizeof(double));
     if (snap == NULL) return NULL;
     snap->mode = inst->mode;
@@ -343,6 +453,7 @@ void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap) {
     if (m->nx > 0) memcpy(snap->values, inst->x, m->nx * sizeof(double));
     if (m->nu > 0) memcpy(snap->values + m->nx, inst->u, m->nu * sizeof(double));
     if (m->np > 0) memcpy(snap->values + m->nx + m->nu, inst->p, m->np * sizeof(double));
+    if (m->nz > 0) memcpy(snap->values + m->nx + m->nu + m->np, inst->m, m->nz * sizeof(double));
 }
 
 void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap) {
@@ -354,6 +465,7 @@ void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap) {
     if (m->nx > 0) memcpy(inst->x, snap->values, m->nx * sizeof(double));
     if (m->nu > 0) memcpy(inst->u, snap->values + m->nx, m->nu * sizeof(double));
     if (m->np > 0) memcpy(inst->p, snap->values + m->nx + m->nu, m->np * sizeof(double));
+    if (m->nz > 0) memcpy(inst->m, snap->values + m->nx + m->nu + m->np, m->nz * sizeof(double));
     mw_invalidate(inst);
 }
 
@@ -369,24 +481,25 @@ int mw_mode_valid(const MwInstance *inst, unsigned int mode) {
 }
 
 /*
- * Serialized FMU state, version 1, native byte order:
+ * Serialized FMU state, version 2, native byte order:
  *   0   8 bytes  "MWFMUST1"
- *   8   uint32   format version (1)
+ *   8   uint32   format version (2)
  *  12   uint32   0x01020304, byte-order mark
  *  16   uint64   total size in bytes
  *  24   64 bytes GUID of the model, zero padded
  *  88   uint32   nx, nu, np, mode
  * 104   double   time, last successful time, internal step
- * 128   double   x[nx], u[nu], p[np]
+ * 128   uint32   nz, then 4 bytes of zeros
+ * 136   double   x[nx], u[nu], p[np], m[nz]
  */
 #define MW_SER_MAGIC "MWFMUST1"
-#define MW_SER_VERSION 1u
+#define MW_SER_VERSION 2u
 #define MW_SER_BOM 0x01020304u
 #define MW_SER_GUID 64u
-#define MW_SER_HEADER 128u
+#define MW_SER_HEADER 136u
 
 size_t mw_serialized_size(const MwModel *m) {
-    return MW_SER_HEADER + (m->nx + m->nu + m->np) * sizeof(double);
+    return MW_SER_HEADER + (m->nx + m->nu + m->np + m->nz) * sizeof(double);
 }
 
 static void put_u32(fmi2Byte *out, size_t at, unsigned int v) {
@@ -403,7 +516,7 @@ static unsigned int get_u32(const fmi2Byte *in, size_t at) {
 void mw_serialize(const MwModel *m, const MwSnapshot *snap, fmi2Byte *out) {
     unsigned long long total = (unsigned long long)mw_serialized_size(m);
     size_t guid_len = strlen(m->guid);
-    size_t nv = m->nx + m->nu + m->np;
+    size_t nv = m->nx + m->nu + m->np + m->nz;
 
     memset(out, 0, MW_SER_HEADER);
     memcpy(out, MW_SER_MAGIC, 8);
@@ -418,13 +531,14 @@ void mw_serialize(const MwModel *m, const MwSnapshot *snap, fmi2Byte *out) {
     memcpy(out + 104, &snap->time, 8);
     memcpy(out + 112, &snap->last_successful_time, 8);
     memcpy(out + 120, &snap->h_int, 8);
+    put_u32(out, 128, (unsigned int)m->nz);
     if (nv > 0) memcpy(out + MW_SER_HEADER, snap->values, nv * sizeof(double));
 }
 
 const char *mw_deserialize(const MwInstance *inst, const fmi2Byte *in, size_t size, MwSnapshot *snap) {
     const MwModel *m = inst->model;
     size_t expected = mw_serialized_size(m);
-    size_t nv = m->nx + m->nu + m->np;
+    size_t nv = m->nx + m->nu + m->np + m->nz;
     unsigned long long total;
     char guid[MW_SER_GUID];
     size_t guid_len = strlen(m->guid);
@@ -439,7 +553,8 @@ const char *mw_deserialize(const MwInstance *inst, const fmi2Byte *in, size_t si
     memset(guid, 0, sizeof(guid));
     memcpy(guid, m->guid, guid_len < MW_SER_GUID ? guid_len : MW_SER_GUID - 1);
     if (memcmp(in + 24, guid, MW_SER_GUID) != 0) return "the state belongs to another model (GUID differs)";
-    if (get_u32(in, 88) != m->nx || get_u32(in, 92) != m->nu || get_u32(in, 96) != m->np)
+    if (get_u32(in, 88) != m->nx || get_u32(in, 92) != m->nu || get_u32(in, 96) != m->np ||
+        get_u32(in, 128) != m->nz)
         return "the vector sizes differ from this model's";
     if (!mw_mode_valid(inst, get_u32(in, 100))) return "the recorded mode is not valid for this instance type";
     memcpy(&t, in + 104, 8);

@@ -56,12 +56,13 @@ typedef struct {
     /* every FMU state taken from this instance and not yet freed, freed with the instance */
     MwSnapshot *snapshots;
 
-    /* model vectors */
-    double *x, *u, *p, *xdot, *y;
+    /* model vectors; m: the discrete modes */
+    double *x, *u, *p, *m, *xdot, *y;
     int xdot_valid, y_valid;
 
-    /* integrator scratch */
+    /* integrator and event scratch */
     double *x_save, *x_stage, *k1, *k2, *k3, *k4;
+    double *m_save, *z0, *z1, *next; /* nz, nz, nz, nz + nx */
 
     /* directional-derivative scratch */
     double *dx, *du, *dp, *dxdot, *dy;
@@ -75,14 +76,14 @@ typedef struct {
     double *block; /* one allocation holding every double vector above */
 } MwInstance;
 
-/* A copy of what fmi2GetFMUstate saves: mode, times, internal step, x, u and p. */
+/* A copy of what fmi2GetFMUstate saves: mode, times, internal step, x, u, p and m. */
 struct MwSnapshot {
     MwSnapshot *prev, *next; /* the owning instance's list */
     unsigned int mode;
     double time;
     double last_successful_time;
     double h_int;
-    double *values; /* nx + nu + np, right after the struct in the same allocation */
+    double *values; /* nx + nu + np + nz, right after the struct in the same allocation */
 };
 
 #define mw_instance_new MW_SYMBOL(mw_instance_new)
@@ -96,6 +97,9 @@ struct MwSnapshot {
 #define mw_all_finite MW_SYMBOL(mw_all_finite)
 #define mw_substeps MW_SYMBOL(mw_substeps)
 #define mw_do_step MW_SYMBOL(mw_do_step)
+#define mw_events MW_SYMBOL(mw_events)
+#define mw_settle_modes MW_SYMBOL(mw_settle_modes)
+#define mw_start_modes MW_SYMBOL(mw_start_modes)
 #define mw_directional MW_SYMBOL(mw_directional)
 #define mw_snapshot_new MW_SYMBOL(mw_snapshot_new)
 #define mw_snapshot_find MW_SYMBOL(mw_snapshot_find)
@@ -137,6 +141,17 @@ MW_HIDDEN unsigned long long mw_substeps(double h, double h_int);
 
 /* The co-simulation step from tc to tc + h in n sub-steps; fmi2Discard keeps the state at tc. */
 MW_HIDDEN fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long n);
+
+/* The event indicators at state x (current u, p, m) into z; 0 on success. */
+MW_HIDDEN int mw_events(MwInstance *inst, const double *x, double *z);
+/*
+ * Repeat the model's mode update until the modes and states stop changing: 0 on success
+ * (*changed: whether anything changed, *x_changed: whether the states did), -1 if the model
+ * failed, -2 if the modes did not settle within 2 nz + 2 passes.
+ */
+MW_HIDDEN int mw_settle_modes(MwInstance *inst, int *changed, int *x_changed);
+/* The model's start modes, then settled; as mw_settle_modes. */
+MW_HIDDEN int mw_start_modes(MwInstance *inst);
 
 /* Forward-mode derivatives: seeds dx, du, dp must be filled; 0 on success. */
 MW_HIDDEN int mw_directional(MwInstance *inst, int need_dxdot, int need_dy);

@@ -3,12 +3,17 @@
  * and instance.c) and one exported model (generated per robot: model_data.c and
  * the CasADi code it points to).
  *
- * A model is a continuous-time system
- *     xdot = ode(x, u, p),   y = out(x, u, p)
+ * A model is a continuous-time system with nz discrete modes m (the friction
+ * mode of each joint; nz may be 0)
+ *     xdot = ode(x, u, p, m),   y = out(x, u, p, m),   z = events(x, u, p, m)
  * with nx states, nu inputs, np parameters and ny outputs, plus the forward
- * directional derivatives of both functions. Every FMI variable is one row of
- * a table indexed by its value reference; a row says which vector the variable
- * lives in (kind) and where (index). The wrapper never knows what the model is.
+ * directional derivatives of ode and out (m held). The nz event indicators z
+ * are positive while the modes are valid. At an event, update(x, u, p, m)
+ * gives the next modes and states (one pass; the wrapper repeats it until
+ * nothing changes); start(x, u, p) gives the modes to begin from. Every FMI
+ * variable is one row of a table indexed by its value reference; a row says
+ * which vector the variable lives in (kind) and where (index). The wrapper
+ * never knows what the model is.
  */
 #ifndef MW_MODEL_H
 #define MW_MODEL_H
@@ -81,6 +86,7 @@ typedef struct {
     const char *model_identifier;
     const char *guid;
     size_t nx, nu, np, ny;
+    size_t nz;                    /* discrete modes = event indicators */
     size_t nvars;                 /* rows of variables[], value references 0..nvars-1 */
     const MwVariable *variables;
     const double *x_start;        /* nx */
@@ -88,10 +94,13 @@ typedef struct {
     const double *u_start;        /* nu */
     const double *p_start;        /* np */
     double step_start;            /* default internal step of the co-simulation integrator */
-    MwFunction ode;               /* (x, u, p) -> xdot */
-    MwFunction out;               /* (x, u, p) -> y */
-    MwFunction ode_dir;           /* (x, u, p, dx, du, dp) -> dxdot, forward mode */
-    MwFunction out_dir;           /* (x, u, p, dx, du, dp) -> dy, forward mode */
+    MwFunction ode;               /* (x, u, p, m) -> xdot */
+    MwFunction out;               /* (x, u, p, m) -> y */
+    MwFunction ode_dir;           /* (x, u, p, m, dx, du, dp) -> dxdot, forward mode */
+    MwFunction out_dir;           /* (x, u, p, m, dx, du, dp) -> dy, forward mode */
+    MwFunction events;            /* (x, u, p, m) -> z, nz indicators, > 0 while the modes hold */
+    MwFunction update;            /* (x, u, p, m) -> (m_next, x_next): one pass of the mode update */
+    MwFunction start;             /* (x, u, p) -> m: the modes to begin from */
 } MwModel;
 
 /* Provided by the generated model_data.c. */

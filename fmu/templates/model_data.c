@@ -20,6 +20,7 @@ static const MwModel mw_model_data = {
     MW_MODEL_IDENTIFIER,
     MW_GUID,
     MW_NX, MW_NU, MW_NP, MW_NY,
+    MW_NZ,
     MW_NVARS,
     mw_variables,
     mw_x_start,
@@ -31,6 +32,9 @@ static const MwModel mw_model_data = {
     {$out, ${out}_work},
     {$ode_dir, ${ode_dir}_work},
     {$out_dir, ${out_dir}_work},
+    {$events, ${events}_work},
+    {$update, ${update}_work},
+    {$start, ${start}_work},
 };
 
 const MwModel *mw_model(void) { return &mw_model_data; }

@@ -9,6 +9,7 @@
 #define MW_NU $nu
 #define MW_NP $np
 #define MW_NY $ny
+#define MW_NZ $nz
 #define MW_NVARS $nvars
 
 /* value references */
