@@ -75,6 +75,9 @@ def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
 
 def read_robot_resource(fmu_path: str | Path) -> Any | None:
     """The description embedded in an FMU, or None if it has none (FMUs of other tools, older exports)."""
+    from .archive import check_fmu_archive
+
+    check_fmu_archive(fmu_path)
     with zipfile.ZipFile(fmu_path) as zf:
         if ROBOT_RESOURCE not in zf.namelist():
             return None

@@ -1,0 +1,283 @@
+"""Hostile files: every sample is made here, refused with one line naming the file and the limit, exit status 2.
+
+FMU archives go through ``manip validate-fmu`` in a subprocess (the real entry
+point, stderr as a user sees it): absolute and ``..`` member names, a symbolic
+link, a huge declared member, a zip bomb's compression ratio, too many members,
+an entity-declaring ``modelDescription.xml``. Each run happens in an empty
+working folder, and the places an escaping member would land are checked to
+stay empty. Robot files, URDFs and waypoint files go through ``manip info``
+and ``manip track`` in this process (``main``, stderr captured) and the loaders.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+import tempfile
+import uuid
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from model.description import RobotDescriptionError, description_from_dict, load_description
+from model.limits import (
+    FMU_RATIO_FLOOR_BYTES,
+    MAX_FILE_BYTES,
+    MAX_FMU_MEMBER_BYTES,
+    MAX_FMU_MEMBERS,
+    MAX_FMU_RATIO,
+    MAX_JOINTS,
+    MAX_WAYPOINTS,
+)
+from model.tasks import WaypointError, load_waypoints
+
+ROOT = Path(__file__).resolve().parents[1]
+MODEL_DESCRIPTION = ('<?xml version="1.0" encoding="UTF-8"?>\n<fmiModelDescription fmiVersion="2.0" modelName="m" '
+                     'guid="{00000000-0000-0000-0000-000000000000}"><ModelVariables/><ModelStructure/>'
+                     '</fmiModelDescription>\n')
+
+
+def manip(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.run([sys.executable, "-m", "workbench.cli", *args], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=600, check=False)
+
+
+def assert_refused(proc: subprocess.CompletedProcess, *fragments: str) -> None:
+    """Exit status 2, one line on stderr holding every fragment, no traceback."""
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.count("\n") == 1, proc.stderr
+    for fragment in fragments:
+        assert fragment in proc.stderr, (fragment, proc.stderr)
+
+
+def main_refuses(capsys, args: list[str], *fragments: str) -> str:
+    """``manip ARGS`` in this process: exit status 2, one line on stderr holding every fragment."""
+    from workbench.cli import main
+
+    status = main(args)
+    out, err = capsys.readouterr()
+    assert_refused(subprocess.CompletedProcess(args, status, out, err), *fragments)
+    return out + err
+
+
+# ------------------------------------------------------------------------- FMU archives
+
+def fmu_with(path: Path, *members: tuple[zipfile.ZipInfo | str, bytes], description: str = MODEL_DESCRIPTION) -> Path:
+    """A zip holding modelDescription.xml and the given members (names or prepared ZipInfo)."""
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("modelDescription.xml", description)
+        for info, data in members:
+            zf.writestr(info, data)
+    return path
+
+
+def set_declared_size(path: Path, member: str, size: int) -> None:
+    """Write ``size`` as the uncompressed size of ``member`` in its local and central headers."""
+    raw = bytearray(path.read_bytes())
+    name = member.encode()
+    # (signature, offset of the uncompressed size, of the name length, of the name) in a local / central header
+    for signature, offset, length_at, name_at in ((b"PK\x03\x04", 22, 26, 30), (b"PK\x01\x02", 24, 28, 46)):
+        at = raw.find(signature)
+        while at >= 0:
+            length = int.from_bytes(raw[at + length_at:at + length_at + 2], "little")
+            if raw[at + name_at:at + name_at + length] == name:
+                raw[at + offset:at + offset + 4] = size.to_bytes(4, "little")
+            at = raw.find(signature, at + 4)
+    path.write_bytes(bytes(raw))
+
+
+@pytest.fixture
+def work(tmp_path):
+    """An empty working folder for the subprocess; it must stay empty."""
+    folder = tmp_path / "work"
+    folder.mkdir()
+    yield folder
+    assert list(folder.iterdir()) == []
+
+
+def escape_targets(tmp_path: Path, name: str) -> list[Path]:
+    """Where a member called ``../name`` would land: next to an extraction folder in the temp dir, or above cwd."""
+    return [Path(tempfile.gettempdir()) / name, tmp_path / name, tmp_path.parent / name]
+
+
+def test_absolute_member_is_refused(tmp_path, work):
+    target = Path(tempfile.gettempdir()) / f"mw-hostile-{uuid.uuid4().hex}" / "owned.txt"
+    fmu = fmu_with(tmp_path / "absolute.fmu", (zipfile.ZipInfo(target.as_posix()), b"owned"))
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, f"absolute.fmu: member '{target.as_posix()}': an absolute path: refused")
+    assert not target.exists() and not target.parent.exists()
+
+
+def test_dotdot_member_is_refused(tmp_path, work):
+    name = f"mw-hostile-{uuid.uuid4().hex}.txt"
+    fmu = fmu_with(tmp_path / "dotdot.fmu", (f"resources/../../{name}", b"owned"))
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, f"dotdot.fmu: member 'resources/../../{name}': a '..' component: refused")
+    assert not any(p.exists() for p in escape_targets(tmp_path, name))
+
+
+def test_symlink_member_is_refused(tmp_path, work):
+    link = zipfile.ZipInfo("resources/passwd")
+    link.create_system = 3
+    link.external_attr = (stat.S_IFLNK | 0o777) << 16
+    fmu = fmu_with(tmp_path / "link.fmu", (link, b"/etc/passwd"))
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, "link.fmu: member 'resources/passwd': a symbolic link: refused, an FMU holds plain files only")
+
+
+def test_huge_declared_member_is_refused(tmp_path, work):
+    fmu = fmu_with(tmp_path / "huge.fmu", ("resources/big.bin", b"x" * 100))
+    set_declared_size(fmu, "resources/big.bin", MAX_FMU_MEMBER_BYTES + 1)
+    assert zipfile.ZipFile(fmu).getinfo("resources/big.bin").file_size == MAX_FMU_MEMBER_BYTES + 1  # the sample bites
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, f"huge.fmu: member 'resources/big.bin': {MAX_FMU_MEMBER_BYTES + 1} bytes uncompressed: "
+                         f"larger than the FMU member limit of {MAX_FMU_MEMBER_BYTES} bytes")
+
+
+def test_zip_bomb_ratio_is_refused(tmp_path, work):
+    # 2 MiB of zeros deflate about 1000 times: above the ratio limit, and above the floor that exempts small members
+    zeros = bytes(2 * FMU_RATIO_FLOOR_BYTES)
+    fmu = fmu_with(tmp_path / "bomb.fmu", ("resources/zeros.bin", zeros))
+    info = zipfile.ZipFile(fmu).getinfo("resources/zeros.bin")
+    assert info.file_size / info.compress_size > MAX_FMU_RATIO
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, "bomb.fmu: member 'resources/zeros.bin': compressed",
+                   f"above the FMU compression-ratio limit of {MAX_FMU_RATIO} (a zip bomb)")
+
+
+def test_too_many_members_are_refused(tmp_path, work):
+    fmu = fmu_with(tmp_path / "many.fmu", *[(f"resources/{k}.txt", b"") for k in range(MAX_FMU_MEMBERS)])
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, f"many.fmu: {MAX_FMU_MEMBERS + 1} members: more than the FMU member limit of {MAX_FMU_MEMBERS}")
+
+
+def test_entities_in_the_model_description_are_refused(tmp_path, work):
+    secret = tmp_path / "secret.txt"
+    secret.write_text("TOP-SECRET-42")
+    xxe = MODEL_DESCRIPTION.replace("<fmiModelDescription", f'<!DOCTYPE fmiModelDescription [<!ENTITY leak SYSTEM '
+                                    f'"file://{secret.as_posix()}">]>\n<fmiModelDescription', 1).replace('"m"', '"&leak;"')
+    fmu = fmu_with(tmp_path / "xxe.fmu", description=xxe)
+    proc = manip("validate-fmu", str(fmu), cwd=work)
+    assert_refused(proc, "xxe.fmu: modelDescription.xml declares a document type (<!DOCTYPE ...>): refused")
+    assert "TOP-SECRET" not in proc.stderr + proc.stdout
+
+
+def test_backslash_and_duplicate_members_are_refused(tmp_path):
+    from fmu.archive import FmuArchiveError, check_fmu_archive
+
+    fmu = fmu_with(tmp_path / "win.fmu", ("resources\\..\\..\\owned.txt", b"x"))
+    with pytest.raises(FmuArchiveError, match=r"win.fmu: member .*: a backslash in the name"):
+        check_fmu_archive(fmu)
+    fmu = tmp_path / "twice.fmu"
+    with pytest.warns(UserWarning, match="Duplicate name"):
+        fmu_with(fmu, ("resources/a.txt", b"1"), ("resources/a.txt", b"2"))
+    with pytest.raises(FmuArchiveError, match=r"twice.fmu: member 'resources/a.txt': stored twice"):
+        check_fmu_archive(fmu)
+
+
+def test_an_exported_fmu_passes_the_checker():
+    """The negative control: what export-fmu writes is inside every limit."""
+    from fmu.archive import check_fmu_archive
+    from fmu_support import trivial_fmu
+
+    check_fmu_archive(trivial_fmu())
+
+
+# ------------------------------------------------------------------------- robot files
+
+def chain_toml(n: int) -> str:
+    link = '[[links]]\njoint = "revolute"\na = 0.1\nalpha = 0.0\nd = 0.0\ntheta = 0.0\nmass = 1.0\n'
+    return 'name = "long"\n' + link * n
+
+
+def test_robot_file_with_too_many_links_is_refused(tmp_path, capsys):
+    path = tmp_path / "long.toml"
+    path.write_text(chain_toml(MAX_JOINTS + 1))
+    main_refuses(capsys, ["info", str(path)], f"long.toml: {MAX_JOINTS + 1} links: more than the joint-count limit of {MAX_JOINTS}")
+
+
+def test_a_chain_at_the_joint_limit_loads():
+    """The limit leaves room for the build-scaling goal (a 25-joint chain builds) and no more is refused."""
+    import tomllib
+
+    assert MAX_JOINTS >= 25
+    desc = description_from_dict(tomllib.loads(chain_toml(MAX_JOINTS)), "limit.toml")
+    assert desc.n == MAX_JOINTS
+
+
+def test_robot_file_too_large_is_refused_unread(tmp_path, capsys):
+    path = tmp_path / "big.toml"
+    with open(path, "wb") as fh:
+        fh.write(chain_toml(2).encode())
+        fh.truncate(MAX_FILE_BYTES + 1)  # a sparse file: the size, not the bytes, is what is refused
+    main_refuses(capsys, ["info", str(path)], f"big.toml: {MAX_FILE_BYTES + 1} bytes: larger than the robot file size limit of "
+                         f"{MAX_FILE_BYTES} bytes")
+
+
+def test_deeply_nested_toml_is_one_line(tmp_path, capsys):
+    path = tmp_path / "deep.toml"
+    path.write_text("name = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    main_refuses(capsys, ["info", str(path)], "deep.toml: arrays or tables nested too deeply to parse")
+
+
+def test_task_with_too_many_waypoints_is_refused(tmp_path):
+    rows = "[" + ", ".join(["[0.0]"] * (MAX_WAYPOINTS + 1)) + "]"
+    path = tmp_path / "tasks.toml"
+    path.write_text(chain_toml(1) + f'[[tasks]]\nname = "many"\nwaypoints = {rows}\n')
+    with pytest.raises(RobotDescriptionError, match=rf"tasks.toml: tasks\[1\].waypoints: {MAX_WAYPOINTS + 1} "
+                                                    rf"waypoints: more than the waypoint limit of {MAX_WAYPOINTS}"):
+        load_description(path)
+
+
+def test_xxe_urdf_through_manip_info(tmp_path, capsys):
+    secret = tmp_path / "secret.txt"
+    secret.write_text("TOP-SECRET-42")
+    path = tmp_path / "xxe.urdf"
+    path.write_text(f'<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY leak SYSTEM "file://{secret.as_posix()}">]>\n'
+                    '<robot name="&leak;"><link name="b"/></robot>\n')
+    printed = main_refuses(capsys, ["info", str(path)], "xxe.urdf: refused: the file declares a document type")
+    assert "TOP-SECRET" not in printed
+
+
+def test_billion_laughs_urdf_through_manip_info(tmp_path, capsys):
+    entities = '<!ENTITY lol "lol">' + "".join(
+        f'<!ENTITY lol{k} "{("&lol" + (str(k - 1) if k > 1 else "") + ";") * 10}">' for k in range(1, 10))
+    path = tmp_path / "laughs.urdf"
+    path.write_text(f'<?xml version="1.0"?>\n<!DOCTYPE robot [{entities}]>\n<robot name="&lol9;"><link name="b"/></robot>\n')
+    main_refuses(capsys, ["info", str(path)], "laughs.urdf: refused: the file declares a document type")
+
+
+# ------------------------------------------------------------------------- waypoint files
+
+def test_csv_with_too_many_waypoints_is_refused(tmp_path):
+    path = tmp_path / "many.csv"
+    path.write_text("q1,q2\n" + "0.1,0.2\n" * (MAX_WAYPOINTS + 1))
+    with pytest.raises(WaypointError, match=rf"many.csv: {MAX_WAYPOINTS + 2} lines: more than the waypoint limit "
+                                            rf"of {MAX_WAYPOINTS}"):
+        load_waypoints(path, "planar2r")
+    path.write_text("q1,q2\n" + "0.1,0.2\n" * MAX_WAYPOINTS)  # at the limit: read
+    assert load_waypoints(path, "planar2r").waypoints.shape == (MAX_WAYPOINTS, 2)
+
+
+def test_toml_with_too_many_waypoints_is_refused(tmp_path):
+    path = tmp_path / "many.toml"
+    path.write_text("waypoints = [" + ", ".join(["[0.1, 0.2]"] * (MAX_WAYPOINTS + 1)) + "]\n")
+    with pytest.raises(WaypointError, match=rf"many.toml: {MAX_WAYPOINTS + 1} waypoints: more than the waypoint "
+                                            rf"limit of {MAX_WAYPOINTS}"):
+        load_waypoints(path, "planar2r")
+
+
+def test_waypoint_file_too_large_through_manip_track(tmp_path, capsys):
+    path = tmp_path / "huge.csv"
+    with open(path, "wb") as fh:
+        fh.write(b"0.1,0.2\n0.3,0.4\n")
+        fh.truncate(MAX_FILE_BYTES + 1)
+    main_refuses(capsys, ["track", "planar2r", "--controller", "pd", "--waypoints", str(path), "--out",
+                          str(tmp_path / "out")], f"huge.csv: {MAX_FILE_BYTES + 1} bytes: larger than the waypoint file size limit of "
+                         f"{MAX_FILE_BYTES} bytes")
+    assert not (tmp_path / "out").exists()
