@@ -11,6 +11,8 @@ and ``manip track`` in this process (``main``, stderr captured) and the loaders.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import stat
 import subprocess
@@ -281,3 +283,73 @@ def test_waypoint_file_too_large_through_manip_track(tmp_path, capsys):
                           str(tmp_path / "out")], f"huge.csv: {MAX_FILE_BYTES + 1} bytes: larger than the waypoint file size limit of "
                          f"{MAX_FILE_BYTES} bytes")
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------------- compile cache
+
+CACHE_SCRIPT = """
+import json, warnings
+import casadi as ca
+import numpy as np
+from model.codegen import CorruptCacheWarning, build_library
+
+x = ca.SX.sym("x", 3)
+f = ca.Function("hostile_f", [x], [ca.vertcat(ca.sin(x[0]) * x[1], x[2] ** 3 - x[0] / (1 + x[1] ** 2))])
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    lib, info = build_library("hostile", "hostile-cache-test", lambda: [f])
+X = np.random.default_rng(1).standard_normal((50, 3))
+y = lib.evaluate("hostile_f", [X], 50)[0]
+ref = np.array([np.asarray(f(row)).ravel() for row in X])
+print(json.dumps({"cached": info.cached, "library": str(info.library), "error": float(np.max(np.abs(y - ref))),
+                  "warnings": [str(w.message) for w in caught if issubclass(w.category, CorruptCacheWarning)]}))
+"""
+
+
+def build_in_subprocess(cache: Path) -> dict:
+    """One build of a small Function in a fresh process (a library loaded in this one would stay mapped)."""
+    env = {**os.environ, "MANIP_CACHE_DIR": str(cache),
+           "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    proc = subprocess.run([sys.executable, "-c", CACHE_SCRIPT], env=env, capture_output=True, text=True, timeout=600,
+                          check=True)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+# The compiled C and CasADi's own evaluation do the same operations in the same order with the same libm
+# (the codegen tests find them bit-identical); 1e-14 absolute on values of order 1-10 leaves rounding room.
+CACHE_ATOL = 1e-14
+
+
+def test_a_corrupt_cached_library_is_rebuilt(tmp_path):
+    cache = tmp_path / "cache"
+    first = build_in_subprocess(cache)
+    assert not first["cached"] and first["warnings"] == [] and first["error"] <= CACHE_ATOL
+    library = Path(first["library"])
+    assert build_in_subprocess(cache)["cached"]                         # the entry is used when it is intact
+    good = library.read_bytes()
+
+    with open(library, "r+b") as fh:                                     # truncated (an interrupted copy)
+        fh.truncate(len(good) // 2)
+    again = build_in_subprocess(cache)
+    assert not again["cached"] and again["error"] <= CACHE_ATOL
+    assert len(again["warnings"]) == 1 and "\n" not in again["warnings"][0]
+    assert "cached library SHA-256" in again["warnings"][0] and "(truncated or altered): deleted, rebuilding" in again["warnings"][0]
+    assert library.read_bytes() == good                                  # the build is deterministic
+
+    flipped = bytearray(good)
+    flipped[len(good) // 2] ^= 0x01                                      # one bit, in the middle
+    library.write_bytes(bytes(flipped))
+    again = build_in_subprocess(cache)
+    assert not again["cached"] and again["error"] <= CACHE_ATOL and len(again["warnings"]) == 1
+    assert "(truncated or altered)" in again["warnings"][0]
+
+    # a library whose recorded SHA-256 was rewritten to match garbage: the load fails, the entry is rebuilt
+    library.write_bytes(b"not a shared object")
+    meta_path = library.with_suffix(".json")
+    meta = json.loads(meta_path.read_text())
+    meta["sha256"] = hashlib.sha256(b"not a shared object").hexdigest()
+    meta_path.write_text(json.dumps(meta))
+    again = build_in_subprocess(cache)
+    assert not again["cached"] and again["error"] <= CACHE_ATOL and len(again["warnings"]) == 1
+    assert "cached library does not load (OSError" in again["warnings"][0]
+    assert build_in_subprocess(cache)["cached"]
