@@ -24,6 +24,11 @@ from pathlib import Path
 
 import pytest
 
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
 from model.description import RobotDescriptionError, description_from_dict, load_description
 from model.limits import (
     FMU_RATIO_FLOOR_BYTES,
@@ -182,6 +187,22 @@ def test_backslash_and_duplicate_members_are_refused(tmp_path):
         check_fmu_archive(fmu)
 
 
+def test_embedded_robot_description_beyond_the_joint_limit_is_refused(tmp_path):
+    """resources/robot.json of a stranger's FMU is a robot file too: the joint-count limit holds there."""
+    from fmu.robot_resource import description_to_json, read_robot_resource
+
+    long = description_from_dict(tomllib.loads(chain_toml(MAX_JOINTS)), "x.toml")
+    doc = json.loads(description_to_json(long))
+    doc["description"]["links"].append(doc["description"]["links"][0])
+    fmu = fmu_with(tmp_path / "long.fmu", ("resources/robot.json", json.dumps(doc).encode()))
+    with pytest.raises(RobotDescriptionError, match=rf"long.fmu: resources/robot.json: {MAX_JOINTS + 1} links: "
+                                                    rf"more than the joint-count limit of {MAX_JOINTS}"):
+        read_robot_resource(fmu)
+    doc["description"]["links"].pop()                                   # at the limit: read
+    fmu = fmu_with(tmp_path / "limit.fmu", ("resources/robot.json", json.dumps(doc).encode()))
+    assert read_robot_resource(fmu).n == MAX_JOINTS
+
+
 def test_an_exported_fmu_passes_the_checker():
     """The negative control: what export-fmu writes is inside every limit."""
     from fmu.archive import check_fmu_archive
@@ -205,8 +226,6 @@ def test_robot_file_with_too_many_links_is_refused(tmp_path, capsys):
 
 def test_a_chain_at_the_joint_limit_loads():
     """The limit leaves room for the build-scaling goal (a 25-joint chain builds) and no more is refused."""
-    import tomllib
-
     assert MAX_JOINTS >= 25
     desc = description_from_dict(tomllib.loads(chain_toml(MAX_JOINTS)), "limit.toml")
     assert desc.n == MAX_JOINTS
