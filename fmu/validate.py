@@ -199,13 +199,16 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
         tools = [t for t in ("nm", "readelf") if shutil.which(t) is None]
         if tools:
             return [f"binary check: expected {tools} on PATH (binutils)"], facts
-        nm = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True)
+        nm = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=False)
+        if nm.returncode != 0:  # not a shared object nm can read: a problem of the FMU, not a crash
+            reason = " ".join(nm.stderr.split())[:200]
+            return [f"{binaries[0]} is not a shared object nm can read ({reason})"], facts
         exports = sorted(line.split()[-1] for line in nm.stdout.splitlines() if line.strip())
         others = [s for s in exports if not s.startswith("fmi2")]
         if others:
             problems.append(f"{binaries[0]} exports non-FMI symbols: {others}")
         facts["exports"] = len(exports)
-        elf = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True, check=True)
+        elf = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True, check=False)
         needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", elf.stdout)
         extra = [lib_name for lib_name in needed if not re.fullmatch(r"lib(c|m)\.so\.\d+", lib_name)]
         if extra:

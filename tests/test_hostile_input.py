@@ -372,3 +372,11 @@ def test_a_corrupt_cached_library_is_rebuilt(tmp_path):
     assert not again["cached"] and again["error"] <= CACHE_ATOL and len(again["warnings"]) == 1
     assert "cached library does not load (OSError" in again["warnings"][0]
     assert build_in_subprocess(cache)["cached"]
+
+
+def test_a_binary_that_is_not_a_shared_object_is_a_problem_not_a_crash(tmp_path):
+    from fmu.validate import binary_problems
+
+    fmu = fmu_with(tmp_path / "garbage.fmu", ("binaries/linux64/m.so", b"MZ not an ELF file"))
+    problems, _ = binary_problems(fmu)
+    assert len(problems) == 1 and "binaries/linux64/m.so is not a shared object nm can read" in problems[0]
