@@ -20,8 +20,10 @@ refuses, with one line naming the file, the member and the limit:
   well-formed XML.
 
 Every function of :mod:`fmu` that opens a user's FMU (validation, FMPy runs,
-libcosim runs, the embedded robot description) calls it first; reading the
-central directory costs about a millisecond.
+libcosim runs, the embedded robot description) calls it first. It costs
+milliseconds (Puma 560 FMU, 27 kB of XML: 17 ms, of which 2 ms the zip and 9 ms
+the XML parse, measured on a loaded 2-core machine), against seconds for what
+follows it.
 """
 
 from __future__ import annotations
