@@ -9,6 +9,7 @@ nothing of controllers: closed loops through FMUs are :mod:`closed_loop`.
 
 __version__ = "0.1.0"
 
+from .archive import FmuArchiveError, check_fmu_archive
 from .build import FmuBuildError, build_driver, build_fmu, export_fmu, export_trivial_fmu
 from .cosim import CosimError, CosimResult, run_libcosim
 from .simulate import SimulationResult, simulate_cs, simulate_me, step_input
@@ -23,6 +24,7 @@ __all__ = [
     "check_inertia",
     "simulate_stick_slip",
     "CosimError",
+    "FmuArchiveError",
     "CosimResult",
     "FmuBuildError",
     "ModelSpec",
@@ -32,6 +34,7 @@ __all__ = [
     "build_driver",
     "build_fmu",
     "build_table",
+    "check_fmu_archive",
     "export_fmu",
     "export_trivial_fmu",
     "run_libcosim",

@@ -15,6 +15,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from .archive import check_fmu_archive
+
 __all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "add_slave", "last_error", "libcosim_unavailable",
            "run_libcosim"]
 
@@ -105,6 +107,8 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
         libcosimpy does not import (see :func:`libcosim_unavailable`).
     CosimError
         libcosim refused a call.
+    fmu.archive.FmuArchiveError
+        The archive breaks a limit of :mod:`fmu.archive` (checked before libcosim extracts it).
     """
     reason = libcosim_unavailable()
     if reason is not None:
@@ -119,6 +123,7 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     path = Path(fmu_path).resolve()
     if not path.is_file():
         raise CosimError(f"fmu_path: expected an FMU file, got {str(path)!r}")
+    check_fmu_archive(path)  # before libcosim extracts it
     step_ns = int(round(step * NS_PER_S))
     if step_ns <= 0:
         raise CosimError(f"step: expected at least 1 ns, got {step!r} s")

@@ -55,28 +55,59 @@ def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
     Raises
     ------
     model.RobotDescriptionError
-        The text is not such a description (``source`` names where it came from).
+        The text is not such a description (``source`` names where it came from), or it has more
+        links than :data:`model.limits.MAX_JOINTS`.
     """
     import types
 
     from model.description import LinkDescription, RobotDescription, RobotDescriptionError
+    from model.limits import MAX_JOINTS
 
     try:
         doc = json.loads(text)
         if doc.get("format") != _FORMAT:
             raise ValueError(f"format {doc.get('format')!r}, expected {_FORMAT!r}")
         data = dict(doc["description"])
+        if len(data["links"]) > MAX_JOINTS:
+            raise RobotDescriptionError(f"{source}: {len(data['links'])} links: more than the joint-count limit "
+                                        f"of {MAX_JOINTS}")
         links = tuple(LinkDescription(**{k: _tuples(v) for k, v in lk.items()}) for lk in data.pop("links"))
         extra = types.MappingProxyType(dict(data.pop("extra", {})))
         return RobotDescription(links=links, extra=extra, path="", **{k: _tuples(v) for k, v in data.items()})
+    except RobotDescriptionError:
+        raise
+    except RecursionError:
+        raise RobotDescriptionError(f"{source}: not a robot description of this workbench: nested too deeply") from None
     except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise RobotDescriptionError(f"{source}: not a robot description of this workbench: {exc}") from None
 
 
 def read_robot_resource(fmu_path: str | Path) -> Any | None:
-    """The description embedded in an FMU, or None if it has none (FMUs of other tools, older exports)."""
+    """The description embedded in an FMU, or None if it has none (FMUs of other tools, older exports).
+
+    Raises
+    ------
+    model.RobotDescriptionError
+        The resource is larger than :data:`model.limits.MAX_FILE_BYTES`, not UTF-8, or not a description.
+    fmu.archive.FmuArchiveError
+        The archive breaks a limit of :mod:`fmu.archive`.
+    """
+    from model.description import RobotDescriptionError
+    from model.limits import MAX_FILE_BYTES
+
+    from .archive import check_fmu_archive
+
+    check_fmu_archive(fmu_path)
+    where = f"{fmu_path}: {ROBOT_RESOURCE}"
     with zipfile.ZipFile(fmu_path) as zf:
         if ROBOT_RESOURCE not in zf.namelist():
             return None
-        text = zf.read(ROBOT_RESOURCE).decode()
-    return description_from_json(text, f"{fmu_path}: {ROBOT_RESOURCE}")
+        size = zf.getinfo(ROBOT_RESOURCE).file_size
+        if size > MAX_FILE_BYTES:
+            raise RobotDescriptionError(f"{where}: {size} bytes: larger than the robot file size limit of "
+                                        f"{MAX_FILE_BYTES} bytes")
+        try:
+            text = zf.read(ROBOT_RESOURCE).decode()
+        except UnicodeDecodeError as exc:
+            raise RobotDescriptionError(f"{where}: not UTF-8 text (byte {exc.start})") from None
+    return description_from_json(text, where)

@@ -5,6 +5,7 @@ digital controller would send it): :func:`step_input` writes them as FMPy's
 step table (two rows at every switching time), so FMPy applies the value
 after the switch in Co-Simulation and raises a time event at every switch in
 Model Exchange. Results come back as a :class:`SimulationResult` of arrays.
+Every FMU passes :func:`fmu.archive.check_fmu_archive` before FMPy opens it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ from typing import Sequence
 
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
+
+from .archive import check_fmu_archive
 
 __all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names"]
 
@@ -37,6 +40,7 @@ class SimulationResult:
 
 def variable_names(fmu_path: str | os.PathLike[str], causality: str) -> list[str]:
     """Names of the FMU's variables of one causality, in value-reference order."""
+    check_fmu_archive(fmu_path)
     md = read_model_description(str(fmu_path))
     return [v.name for v in sorted(md.modelVariables, key=lambda v: v.valueReference) if v.causality == causality]
 
@@ -74,6 +78,7 @@ def simulate_cs(fmu_path: str | os.PathLike[str], stop_time: float, step: float,
                 inputs: np.ndarray | None = None, outputs: Sequence[str] | None = None,
                 start_values: dict[str, float] | None = None) -> SimulationResult:
     """Co-Simulation by FMPy with communication step ``step`` (s), outputs every step."""
+    check_fmu_archive(fmu_path)
     names = list(outputs) if outputs is not None else variable_names(fmu_path, "output")
     raw = simulate_fmu(str(fmu_path), fmi_type="CoSimulation", stop_time=stop_time, output_interval=step,
                        input=inputs, output=names, start_values=start_values or {})
@@ -84,6 +89,7 @@ def simulate_me(fmu_path: str | os.PathLike[str], stop_time: float, output_inter
                 inputs: np.ndarray | None = None, outputs: Sequence[str] | None = None,
                 start_values: dict[str, float] | None = None, relative_tolerance: float = 1e-8) -> SimulationResult:
     """Model Exchange by FMPy with its CVode solver (BDF, Newton) at ``relative_tolerance``."""
+    check_fmu_archive(fmu_path)
     names = list(outputs) if outputs is not None else variable_names(fmu_path, "output")
     raw = simulate_fmu(str(fmu_path), fmi_type="ModelExchange", solver="CVode", stop_time=stop_time,
                        output_interval=output_interval, relative_tolerance=relative_tolerance,

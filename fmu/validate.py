@@ -11,6 +11,12 @@
 * FMU state get/set and serialise/deserialise round trips, bit for bit;
 * directional derivatives against central finite differences;
 * libcosim, the second importer: two instances side by side, against FMPy.
+
+Every function here that opens an FMU first passes it through
+:func:`fmu.archive.check_fmu_archive` (limits, paths, links, zip bombs): a
+hostile archive is refused before anything is extracted or loaded. The checks
+after it load and run the FMU's binary: validate only FMUs whose binary you
+would run.
 """
 
 from __future__ import annotations
@@ -27,6 +33,8 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
+
+from .archive import MODEL_DESCRIPTION, check_fmu_archive
 
 __all__ = [
     "TOLERANCES",
@@ -175,6 +183,7 @@ def model_description_problems(fmu_path: str | os.PathLike[str]) -> list[str]:
     """FMPy's validation of the FMU (schema, variable names, units, ModelStructure)."""
     from fmpy.validation import validate_fmu as fmpy_validate_fmu
 
+    check_fmu_archive(fmu_path)
     return list(fmpy_validate_fmu(str(fmu_path)))
 
 
@@ -183,6 +192,7 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
 
     Returns the problems and facts (``exports``, ``needed``) for the report.
     """
+    check_fmu_archive(fmu_path)
     problems: list[str] = []
     facts: dict[str, Any] = {}
     with tempfile.TemporaryDirectory(prefix="mw_fmu_check_") as tmp, zipfile.ZipFile(fmu_path) as zf:
@@ -193,13 +203,16 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
         tools = [t for t in ("nm", "readelf") if shutil.which(t) is None]
         if tools:
             return [f"binary check: expected {tools} on PATH (binutils)"], facts
-        nm = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True)
+        nm = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=False)
+        if nm.returncode != 0:  # not a shared object nm can read: a problem of the FMU, not a crash
+            reason = " ".join(nm.stderr.split())[:200]
+            return [f"{binaries[0]} is not a shared object nm can read ({reason})"], facts
         exports = sorted(line.split()[-1] for line in nm.stdout.splitlines() if line.strip())
         others = [s for s in exports if not s.startswith("fmi2")]
         if others:
             problems.append(f"{binaries[0]} exports non-FMI symbols: {others}")
         facts["exports"] = len(exports)
-        elf = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True, check=True)
+        elf = subprocess.run(["readelf", "-d", str(lib)], capture_output=True, text=True, check=False)
         needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", elf.stdout)
         extra = [lib_name for lib_name in needed if not re.fullmatch(r"lib(c|m)\.so\.\d+", lib_name)]
         if extra:
@@ -209,15 +222,16 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
 
 
 def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
-    """The ``modelDescription.xml`` of an FMU; ValueError names the file if it is not an FMU."""
-    if not Path(fmu_path).is_file():
-        raise ValueError(f"not an FMU: {fmu_path} is not a file")
-    if not zipfile.is_zipfile(fmu_path):
-        raise ValueError(f"not an FMU: {fmu_path} is not a zip archive")
+    """The ``modelDescription.xml`` of an FMU, after :func:`~fmu.archive.check_fmu_archive`.
+
+    Raises
+    ------
+    fmu.archive.FmuArchiveError
+        A ValueError naming the file: not an FMU, or an archive that breaks a limit.
+    """
+    check_fmu_archive(fmu_path)
     with zipfile.ZipFile(fmu_path) as zf:
-        if "modelDescription.xml" not in zf.namelist():
-            raise ValueError(f"not an FMU: {fmu_path} has no modelDescription.xml")
-        return zf.read("modelDescription.xml")
+        return zf.read(MODEL_DESCRIPTION)
 
 
 def _robot_node(fmu_path: str | os.PathLike[str]) -> ET.Element | None:
@@ -416,6 +430,7 @@ def _slave(fmu_path: str | os.PathLike[str], unzip_dir: str, name: str, kind: st
     from fmpy import read_model_description
     from fmpy.fmi2 import FMU2Model, FMU2Slave
 
+    check_fmu_archive(fmu_path)
     md = read_model_description(str(fmu_path))
     cls = FMU2Slave if kind == "cs" else FMU2Model
     ident = md.coSimulation.modelIdentifier if kind == "cs" else md.modelExchange.modelIdentifier
@@ -444,6 +459,7 @@ def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], 
     """
     from fmpy import extract, read_model_description
 
+    check_fmu_archive(fmu_path)
     md = read_model_description(str(fmu_path))
     vin, vout = _vrs(md, input_names), _vrs(md, output_names)
     unzip = extract(str(fmu_path))
@@ -539,6 +555,7 @@ def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7
     """
     from fmpy import extract, read_model_description
 
+    check_fmu_archive(fmu_path)
     md = read_model_description(str(fmu_path))
     unzip = extract(str(fmu_path))
     try:
@@ -716,7 +733,7 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     Nothing but the FMU is needed: the robot comes from its ``resources/robot.json``.
     """
     fmu_path = str(fmu_path)
-    model_description_xml(fmu_path)  # ValueError naming the file if it is not an FMU
+    check_fmu_archive(fmu_path)  # FmuArchiveError (a ValueError) naming the file, before anything is extracted
     _say(progress, "validating modelDescription.xml with FMPy")
     report = ValidationReport(fmu_path, model_description_problems(fmu_path), *binary_problems(fmu_path))
     report.robot = fmu_robot(fmu_path)
@@ -825,5 +842,6 @@ def _internal_step(fmu_path: str) -> float:
     """The start value of the FMU's ``internal_step``, s."""
     from fmpy import read_model_description
 
+    check_fmu_archive(fmu_path)
     md = read_model_description(fmu_path)
     return float(next(v.start for v in md.modelVariables if v.name == "internal_step"))

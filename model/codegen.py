@@ -28,7 +28,12 @@ that hashes the caller's key material (robot, motor model, model sources), the
 generator version, this module's source, the C files of ``model/dynamics/c``,
 the CasADi version, the compiler and the flag policy. Files land in the cache
 by write-to-temporary then ``os.replace``, so concurrent builds of the same key
-are safe. A ``progress`` callback receives a :class:`BuildEvent` per stage.
+are safe: the library first, then its metadata (``.json``, which records the
+library's SHA-256 and whose presence marks a complete entry). Before a cached
+library is loaded its SHA-256 is checked against the metadata; a mismatch (a
+truncated or altered file), unreadable metadata or a library that does not
+load deletes the entry, warns once (:class:`CorruptCacheWarning`) and
+rebuilds. A ``progress`` callback receives a :class:`BuildEvent` per stage.
 """
 
 from __future__ import annotations
@@ -42,6 +47,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from functools import lru_cache
@@ -61,6 +67,7 @@ __all__ = [
     "CompileError",
     "CompiledLibrary",
     "CompilerNotFoundError",
+    "CorruptCacheWarning",
     "FunctionSignature",
     "GENERATED_CFLAGS",
     "GENERATOR_VERSION",
@@ -107,6 +114,10 @@ class CompilerNotFoundError(RuntimeError):
 
 class CompileError(RuntimeError):
     """The C compiler rejected generated code; the message holds the command and its output."""
+
+
+class CorruptCacheWarning(UserWarning):
+    """A cached library did not match its recorded SHA-256 or did not load: it was deleted and rebuilt."""
 
 
 @dataclass(frozen=True)
@@ -495,6 +506,38 @@ def _compiler_version(compiler: str) -> str:
         return compiler
 
 
+def _file_sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _load_cached(lib_path: Path, meta_path: Path) -> CompiledLibrary | None:
+    """The cached library if its SHA-256 matches the metadata and it loads; else delete the entry, warn, None."""
+    try:
+        meta = json.loads(meta_path.read_text())
+        sigs = [FunctionSignature.from_dict(entry) for entry in meta["functions"]]
+        recorded = meta["sha256"]
+        actual = _file_sha256(lib_path)
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        problem = f"unreadable cache entry ({type(exc).__name__}: {exc})"
+    else:
+        if actual != recorded:
+            problem = f"SHA-256 {actual[:16]}... differs from the recorded {str(recorded)[:16]}... (truncated or altered)"
+        else:
+            try:
+                return CompiledLibrary(lib_path, sigs)
+            except (OSError, AttributeError, CompileError) as exc:
+                problem = f"does not load ({type(exc).__name__}: {exc})"
+    for path in (meta_path, lib_path):  # the metadata first: without it the entry is incomplete
+        path.unlink(missing_ok=True)
+    message = " ".join(f"{lib_path}: cached library {problem}: deleted, rebuilding".split())
+    warnings.warn(message, CorruptCacheWarning, stacklevel=3)
+    return None
+
+
 def _megabytes(n_bytes: int) -> str:
     return f"{n_bytes / 1e6:.2f} MB" if n_bytes >= 1e5 else f"{n_bytes / 1e3:.0f} kB"
 
@@ -532,6 +575,9 @@ def build_library(
     progress
         Called with a :class:`BuildEvent` at each stage (and as each unit finishes compiling).
 
+    A cached library whose SHA-256 differs from the one recorded at build time, or
+    that does not load, is deleted and rebuilt with a :class:`CorruptCacheWarning`.
+
     Raises
     ------
     CompilerNotFoundError
@@ -551,13 +597,11 @@ def build_library(
     base = f"{stem}-{key[:20]}"
     lib_path = folder / f"{base}.so"
     meta_path = folder / f"{base}.json"
-    if not force and lib_path.is_file() and meta_path.is_file():
-        meta = json.loads(meta_path.read_text())
-        sigs = [FunctionSignature.from_dict(entry) for entry in meta["functions"]]
-        library = CompiledLibrary(lib_path, sigs)
+    cached = _load_cached(lib_path, meta_path) if not force and meta_path.is_file() else None
+    if cached is not None:
         total = time.perf_counter() - t0
         say("cached", f"loaded from the cache in {total * 1e3:.0f} ms ({lib_path})")
-        return library, BuildInfo(key, lib_path, True, 0.0, 0.0, 0.0, total, compiler, GENERATED_CFLAGS)
+        return cached, BuildInfo(key, lib_path, True, 0.0, 0.0, 0.0, total, compiler, GENERATED_CFLAGS)
 
     say("symbolic", "building the symbolic functions")
     t_sym = time.perf_counter()
@@ -615,6 +659,7 @@ def build_library(
             "compiler": compiler, "flags": list(GENERATED_CFLAGS),
             "units": [dataclasses.asdict(u) for u in unit_info],
             "functions": [dataclasses.asdict(s) for s in sigs],
+            "sha256": _file_sha256(out),
         }
         meta_tmp = tmp_dir / f"{base}.json"
         meta_tmp.write_text(json.dumps(meta, indent=1))

@@ -37,10 +37,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
+from .limits import MAX_JOINTS, MAX_WAYPOINTS, load_toml
 
 __all__ = [
     "CONVENTIONS",
@@ -411,6 +408,9 @@ def _task(w: _Where, k: int, data: Any, links: Sequence[LinkDescription], names:
     rows = data["waypoints"]
     if not isinstance(rows, list) or len(rows) < 2:
         raise w.fail(None, f"{where}.waypoints", rows, f"a list of at least 2 joint vectors of {len(links)} values")
+    if len(rows) > MAX_WAYPOINTS:
+        raise RobotDescriptionError(f"{w.path}: {where}.waypoints: {len(rows)} waypoints: more than the waypoint "
+                                    f"limit of {MAX_WAYPOINTS}")
     waypoints = []
     for r, row in enumerate(rows, 1):
         vec = _vector(w, None, f"{where}.waypoints[{r}]", row, len(links))
@@ -455,6 +455,8 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
     raw_links = data["links"]
     if not isinstance(raw_links, list) or not raw_links:
         raise w.fail(None, "links", raw_links, "at least one [[links]] table")
+    if len(raw_links) > MAX_JOINTS:
+        raise RobotDescriptionError(f"{w.path}: {len(raw_links)} links: more than the joint-count limit of {MAX_JOINTS}")
     links = tuple(_link(w, i, lk) for i, lk in enumerate(raw_links))
     gravity = _vector(w, None, "gravity", data.get("gravity", [0.0, 0.0, -9.81]), 3)
     rest = None
@@ -499,11 +501,7 @@ def load_description(name_or_path: str | Path) -> RobotDescription:
         from .urdf import description_from_urdf
 
         return description_from_urdf(path)
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise RobotDescriptionError(f"{path}: not valid TOML: {exc}") from exc
+    data = load_toml(path, "robot file", RobotDescriptionError)
     if "urdf" in data:  # a TOML that points at a URDF and adds what URDF lacks
         from .urdf import description_from_urdf_toml
 

@@ -35,12 +35,8 @@ import numpy as np
 import numpy.typing as npt
 
 from .description import InertiaConsistencyWarning, RobotDescription, load_description
+from .limits import MAX_WAYPOINTS, load_toml, read_bounded
 from .trajectory import Trajectory, via_points
-
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
 
 __all__ = [
     "Task",
@@ -224,6 +220,8 @@ def check_waypoints(waypoints: npt.ArrayLike, robot: str | Path | RobotDescripti
     rows = waypoints.tolist() if isinstance(waypoints, np.ndarray) else list(waypoints)  # type: ignore[arg-type]
     if len(rows) < 2:
         raise WaypointError(f"{where}: expected at least 2 waypoints, got {len(rows)}")
+    if len(rows) > MAX_WAYPOINTS:
+        raise WaypointError(f"{where}: {len(rows)} waypoints: more than the waypoint limit of {MAX_WAYPOINTS}")
     qlim = desc.qlim
     for r, row in enumerate(rows, 1):
         if not isinstance(row, (list, tuple)):
@@ -278,11 +276,7 @@ _TOML_KEYS = ("waypoints", "segment_time", "description", "labels")
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise WaypointError(f"{path}: not valid TOML: {exc}") from exc
+    data = load_toml(path, "waypoint file", WaypointError)
     for key in data:
         if key not in _TOML_KEYS:
             raise WaypointError(f"{path}: unknown key {key!r}; expected one of {', '.join(_TOML_KEYS)}")
@@ -296,8 +290,13 @@ def _read_toml(path: Path) -> dict[str, Any]:
 
 def _read_csv(path: Path) -> list[list[Any]]:
     rows: list[list[Any]] = []
-    with open(path, newline="") as fh:
-        lines = [ln for ln in fh if ln.strip() and not ln.lstrip().startswith("#")]
+    try:
+        text = read_bounded(path, "waypoint file", WaypointError).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise WaypointError(f"{path}: not UTF-8 text (byte {exc.start}): expected a CSV file of numbers") from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(lines) > MAX_WAYPOINTS + 1:  # + 1: a header line; counted before any row is parsed
+        raise WaypointError(f"{path}: {len(lines)} lines: more than the waypoint limit of {MAX_WAYPOINTS}")
     for i, fields in enumerate(csv.reader(lines)):
         cells = [c.strip() for c in fields]
         parsed: list[Any] = []
@@ -336,7 +335,8 @@ def load_waypoints(path: str | Path, robot: str | Path | RobotDescription = "sca
     ------
     WaypointError
         Naming the file, the row and the joint: wrong joint count, not a number,
-        NaN/inf, outside qlim; bad TOML; an unknown file type.
+        NaN/inf, outside qlim; bad TOML; an unknown file type; a file above
+        :data:`model.limits.MAX_FILE_BYTES` or with more than :data:`model.limits.MAX_WAYPOINTS` rows.
     FileNotFoundError
         If ``path`` does not exist.
     """

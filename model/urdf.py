@@ -4,7 +4,8 @@ A URDF is read by ``yourdfpy`` (meshes never loaded, no scene graph) after the
 bytes have passed ``defusedxml`` with document type declarations refused, so
 neither an external entity (a local file, a URL) nor an entity bomb is ever
 expanded; files above :data:`MAX_URDF_BYTES` and trees with more than
-:data:`MAX_MOVING_JOINTS` moving joints are refused before any work.
+:data:`MAX_MOVING_JOINTS` moving joints are refused before any work (both are
+the limits of :mod:`model.limits`, the same as for a robot TOML).
 
 The model is the chain from ``base_link`` (default: the URDF root) to
 ``tip_link`` (default: the only leaf). Its links use the ``"urdf"`` convention
@@ -31,6 +32,9 @@ from xml.etree.ElementTree import ParseError
 import numpy as np
 
 from .description import RobotDescription, RobotDescriptionError, _link, _Where, description_from_dict
+from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
+from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
+from .limits import read_bounded
 
 __all__ = [
     "MAX_URDF_BYTES",
@@ -45,8 +49,6 @@ __all__ = [
     "description_from_urdf_toml",
 ]
 
-MAX_URDF_BYTES = 10 * 1024 * 1024
-MAX_MOVING_JOINTS = 64
 #: The keys a ``[joints.NAME]`` table may hold: the motor keys of a ``[[links]]`` table, and its source.
 MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source")
 _MOVING = ("revolute", "continuous", "prismatic")
@@ -110,16 +112,7 @@ def read_urdf(path: str | Path) -> Any:
     import defusedxml.ElementTree as safe_et
 
     path = Path(path)
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise RobotDescriptionError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
-    if size > MAX_URDF_BYTES:
-        raise RobotDescriptionError(f"{path}: {size} bytes: larger than the URDF size limit of {MAX_URDF_BYTES} bytes")
-    with open(path, "rb") as fh:
-        data = fh.read(MAX_URDF_BYTES + 1)
-    if len(data) > MAX_URDF_BYTES:
-        raise RobotDescriptionError(f"{path}: larger than the URDF size limit of {MAX_URDF_BYTES} bytes")
+    data = read_bounded(path, "URDF", RobotDescriptionError)
     try:
         root = safe_et.fromstring(data, forbid_dtd=True, forbid_entities=True, forbid_external=True)
     except (defusedxml.DTDForbidden, defusedxml.EntitiesForbidden, defusedxml.ExternalReferenceForbidden):

@@ -53,10 +53,20 @@ def test_a_missing_fmu_is_an_error_not_a_crash():
 
 
 def test_a_corrupt_fmu_is_an_error_not_a_crash():
+    """run_libcosim refuses it in the archive check, before libcosim sees it (a behaviour change of the
+    hostile-input work: it was libcosim's refusal); libcosim's own refusal is still an error, not a crash."""
+    from libcosimpy.CosimExecution import CosimExecution
+
+    from fmu.archive import FmuArchiveError
+    from fmu.cosim import add_slave
+
     bad = build_root() / "corrupt.fmu"
     bad.write_bytes(b"this is not a zip file")
-    with pytest.raises(CosimError, match="libcosim could not load corrupt.fmu as instance 'robot_a'"):
+    with pytest.raises(FmuArchiveError, match="not an FMU: .*corrupt.fmu is not a zip archive"):
         run_libcosim(bad, stop_time=0.1, step=1e-3)
+    execution = CosimExecution.from_step_size(1_000_000)
+    with pytest.raises(CosimError, match="libcosim could not load corrupt.fmu as instance 'robot_a'"):
+        add_slave(execution, bad, "robot_a")
 
 
 def test_unknown_variable_names_are_reported():

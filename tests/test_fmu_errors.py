@@ -465,6 +465,26 @@ def test_deserialise_non_finite_values(cs):
     cs.fmu.freeFMUstate(state)
 
 
+def test_every_bit_flip_of_the_header_and_every_truncation_is_refused(cs):
+    """A corrupted state byte string through FMPy: one bit flipped anywhere in bytes 0-103 (magic, version,
+    byte order, size, GUID and its zero padding, vector sizes, mode) or the string cut anywhere is refused.
+    The times and values from byte 104 are checked for finiteness only (the non-finite test above): a flip
+    there that stays finite is another valid state, which no check of the format can tell from a real one."""
+    state = cs.fmu.getFMUstate()
+    data = cs.fmu.serializeFMUstate(state)
+    restored = cs.fmu.deSerializeFMUstate(data)           # the negative control: the intact string is accepted
+    cs.fmu.freeFMUstate(restored)
+    for at in range(104):
+        for bit in range(8):
+            bad = bytearray(data)
+            bad[at] ^= 1 << bit
+            assert status_of(cs.fmu.deSerializeFMUstate, bytes(bad)) == fmi2Error, (at, bit)
+    for cut in (0, 1, 8, 103, 104, 128, len(data) - 8, len(data) - 1):
+        assert status_of(cs.fmu.deSerializeFMUstate, data[:cut]) == fmi2Error, cut
+    assert_logged(cs, fmi2Error, "logStatusError", f"fmi2DeSerializeFMUstate: {len(data) - 1} bytes rejected")
+    cs.fmu.freeFMUstate(state)
+
+
 def test_serialise_into_a_buffer_of_the_wrong_size(cs):
     state = cs.fmu.getFMUstate()
     size = c_size_t()
