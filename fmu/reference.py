@@ -37,11 +37,11 @@ class StickSlipResult:
 
 
 def coulomb_limits(robot: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Joint-side Coulomb torques ``(Tc+, Tc-)`` (n,) each, N m or N: ``|G|`` times the motor-side values."""
+    """Joint-side Coulomb torques ``(Tc+, Tc-)`` (n,) each, N m or N: ``|G|`` times the motor-side values
+    of the robot's parameters (:attr:`model.Robot.parameters`)."""
     G = np.abs(np.asarray(robot.gear_ratio, dtype=float))
-    pos = np.array([lk.coulomb_friction[0] for lk in robot.description.links], dtype=float)
-    neg = np.array([lk.coulomb_friction[1] for lk in robot.description.links], dtype=float)
-    return G * pos, G * neg
+    p = robot.parameters
+    return G * p.field("coulomb_friction_pos"), G * p.field("coulomb_friction_neg")
 
 
 def mode_dynamics(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray,
@@ -122,13 +122,9 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
     """
     from scipy.integrate import solve_ivp
 
-    from model import Robot
-
     n = robot.n
     tc_pos, tc_neg = coulomb_limits(robot)
-    smooth = Robot(robot.description, motor_model=robot.motor_model)
-    smooth.dynamics.set_parameters(robot.dynamics.p)
-    smooth.dynamics.set_friction(coulomb_pos=np.zeros(n), coulomb_neg=np.zeros(n))
+    smooth = robot.with_parameters(robot.parameters.with_friction(coulomb_pos=np.zeros(n), coulomb_neg=np.zeros(n)))
     G = np.asarray(robot.gear_ratio, dtype=float)
     x = np.concatenate([robot.q_rest, np.zeros(n)]) if x0 is None else np.asarray(x0, dtype=float).copy()
 
