@@ -35,6 +35,7 @@ from typing import Any, Callable
 import casadi as ca
 
 from model.codegen import CompilerNotFoundError, compile_flags, compile_objects, find_compiler, generate_c
+from model.errors import ToolchainError
 
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
@@ -68,7 +69,7 @@ STAMP = "generated, do not edit"
 Progress = Callable[[str], None]
 
 
-class FmuBuildError(RuntimeError):
+class FmuBuildError(ToolchainError):
     """Generating or compiling an FMU failed; the message carries the compiler's output."""
 
 

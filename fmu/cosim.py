@@ -15,13 +15,15 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from model.errors import ToolchainError
+
 __all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "add_slave", "last_error", "libcosim_unavailable",
            "run_libcosim"]
 
 NS_PER_S = 1_000_000_000
 
 
-class CosimError(RuntimeError):
+class CosimError(ToolchainError):
     """libcosim refused a call (load, add, connect, step); the message says which and why."""
 
 

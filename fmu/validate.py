@@ -28,6 +28,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from model.errors import InputError
+
 __all__ = [
     "TOLERANCES",
     "ME_RTOL",
@@ -238,7 +240,7 @@ def fmu_robot_digest(fmu_path: str | os.PathLike[str]) -> str | None:
     return None if node is None else node.get("digest") or None
 
 
-class RobotNotReloadableError(ValueError):
+class RobotNotReloadableError(InputError):
     """The robot recorded in an FMU does not load again as the robot the FMU was built from."""
 
 

@@ -10,6 +10,7 @@ from .description import (
     load_description,
 )
 from .dynamics import Dynamics
+from .errors import InputError, NumericalError, ToolchainError, WorkbenchError
 from .clik import CLIKResult, clik, seed_clik_task
 from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
 from .robot import Robot, load_robot
@@ -24,6 +25,10 @@ __all__ = [
     "robot_tasks",
     "CLIKResult",
     "Dynamics",
+    "InputError",
+    "NumericalError",
+    "ToolchainError",
+    "WorkbenchError",
     "IKResult",
     "IKSolution",
     "NoClosedFormError",

@@ -37,6 +37,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from .errors import InputError
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -79,7 +81,7 @@ SI_UNITS: dict[str, tuple[str, ...]] = {
 }
 
 
-class RobotDescriptionError(ValueError):
+class RobotDescriptionError(InputError):
     """A robot description is invalid; the message names file, link, field, value and expectation."""
 
 

@@ -35,6 +35,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .description import InertiaConsistencyWarning, RobotDescription, load_description
+from .errors import InputError
 from .trajectory import Trajectory, via_points
 
 try:  # Python >= 3.11
@@ -60,7 +61,7 @@ __all__ = [
 #: Name of the generic task every robot has (:func:`tour`).
 TOUR = "tour"
 
-class WaypointError(ValueError):
+class WaypointError(InputError):
     """Waypoints are unreadable or invalid for the robot; the message names the source, row and joint."""
 
 
