@@ -36,6 +36,7 @@ import casadi as ca
 
 from model.codegen import CompilerNotFoundError, compile_flags, compile_objects, find_compiler, generate_c
 from model.errors import ToolchainError
+from model.files import atomic_path
 
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
@@ -188,12 +189,10 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
             (root / ROBOT_RESOURCE).parent.mkdir(parents=True, exist_ok=True)
             (root / ROBOT_RESOURCE).write_text(spec.robot_json)
         _say(progress, f"writing {path}")
-        tmp_fmu = Path(tmp) / path.name
-        with zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
+        with atomic_path(path) as tmp_fmu, zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
             for file in sorted(root.rglob("*")):
                 if file.is_file():
                     zf.write(file, file.relative_to(root).as_posix())
-        shutil.move(str(tmp_fmu), path)
     return path
 
 

@@ -338,12 +338,11 @@ def load_waypoints(path: str | Path, robot: str | Path | RobotDescription = "sca
     WaypointError
         Naming the file, the row and the joint: wrong joint count, not a number,
         NaN/inf, outside qlim; bad TOML; an unknown file type.
-    FileNotFoundError
-        If ``path`` does not exist.
+        Also when ``path`` does not exist.
     """
     p = Path(path)
     if not p.is_file():
-        raise FileNotFoundError(f"{p}: no such waypoint file")
+        raise WaypointError(f"{p}: no such waypoint file")
     suffix = p.suffix.lower()
     file_time: Any = None
     description = f"waypoints from {p.name}"
