@@ -22,6 +22,7 @@ the units are compiled in parallel. No floating-point contraction
 from __future__ import annotations
 
 import hashlib
+import importlib.metadata
 import os
 import platform
 import shutil
@@ -42,6 +43,7 @@ from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, t
 
 __all__ = [
     "FmuBuildError",
+    "tool_version",
     "C_DIR",
     "CFLAGS",
     "CASADI_CFLAGS",
@@ -72,6 +74,14 @@ Progress = Callable[[str], None]
 
 class FmuBuildError(ToolchainError):
     """Generating or compiling an FMU failed; the message carries the compiler's output."""
+
+
+def tool_version() -> str:
+    """The workbench's version, from the installed package metadata (written into modelDescription.xml)."""
+    try:
+        return importlib.metadata.version("manipulator-workbench")
+    except importlib.metadata.PackageNotFoundError:  # a source tree that was never installed
+        return "0+unknown"
 
 
 def fmi_headers_dir() -> Path:
@@ -180,9 +190,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         _say(progress, f"compiling with {_compiler()} " + " ".join(CFLAGS))
         binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
         _compile(sources, c_files, binary, Path(tmp) / "obj")
-        from . import __version__
-
-        (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, __version__))
+        (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, tool_version()))
         if spec.robot_json:
             from .robot_resource import ROBOT_RESOURCE
 

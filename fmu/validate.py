@@ -261,7 +261,7 @@ def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
         not a built-in robot.
     """
     from model import Robot
-    from model.description import load_description
+    from model.loading import load_description
 
     from .robot_resource import read_robot_resource
 

@@ -1,16 +1,10 @@
 """Robot description, kinematics, inverse kinematics, trajectories and dynamics of serial arms."""
 
 from .chain import Chain, build_chain
-from .description import (
-    BUILTIN_ROBOTS,
-    InertiaConsistencyWarning,
-    LinkDescription,
-    RobotDescription,
-    RobotDescriptionError,
-    load_description,
-)
+from .description import BUILTIN_ROBOTS, InertiaConsistencyWarning, LinkDescription, RobotDescription, RobotDescriptionError
 from .dynamics import Dynamics
 from .errors import InputError, NumericalError, ToolchainError, WorkbenchError
+from .loading import load_description
 from .clik import CLIKResult, clik, seed_clik_task
 from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
 from .robot import Robot, load_robot

@@ -39,11 +39,6 @@ import numpy as np
 
 from .errors import InputError
 
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
-
 __all__ = [
     "CONVENTIONS",
     "SI_UNITS",
@@ -51,7 +46,6 @@ __all__ = [
     "RobotDescription",
     "RobotDescriptionError",
     "InertiaConsistencyWarning",
-    "load_description",
     "description_from_dict",
     "BUILTIN_DIR",
     "BUILTIN_ROBOTS",
@@ -479,30 +473,3 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
         path=str(path), convention=convention, base=base, tool=tool,
         extra=types.MappingProxyType(extra),
     )
-
-
-def load_description(name_or_path: str | Path) -> RobotDescription:
-    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`), a TOML file or a ``.urdf`` file by path."""
-    text_name = str(name_or_path)
-    if text_name in BUILTIN_ROBOTS:
-        path = BUILTIN_DIR / f"{text_name}.toml"
-    else:
-        path = Path(name_or_path)
-        if not path.is_file():
-            raise RobotDescriptionError(
-                f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; no such file"
-            )
-    if path.suffix.lower() == ".urdf":
-        from .urdf import description_from_urdf
-
-        return description_from_urdf(path)
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise RobotDescriptionError(f"{path}: not valid TOML: {exc}") from exc
-    if "urdf" in data:  # a TOML that points at a URDF and adds what URDF lacks
-        from .urdf import description_from_urdf_toml
-
-        return description_from_urdf_toml(data, path)
-    return description_from_dict(data, str(path))

@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from .arrays import finite_vector
-from .description import RobotDescription, load_description
+from .arrays import as_joint_vector, finite_vector
+from .description import RobotDescription
 from .kinematics import KinematicsFunctions, build_kinematics
+from .loading import load_description
 
 if TYPE_CHECKING:  # pragma: no cover
     import control
@@ -25,12 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .ik import IKResult, IKSolution
     from .singularity import SingularityReport
 
-__all__ = ["Robot", "load_robot", "as_joint_vector"]
-
-
-def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
-    """``value`` as a finite float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
-    return finite_vector(value, n, name, "joint values")
+__all__ = ["Robot", "load_robot"]
 
 
 def _as_pose(T: Any) -> np.ndarray:

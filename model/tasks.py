@@ -34,7 +34,8 @@ from typing import Any, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .description import InertiaConsistencyWarning, RobotDescription, load_description
+from .description import InertiaConsistencyWarning, RobotDescription
+from .loading import load_description
 from .errors import InputError
 from .trajectory import Trajectory, via_points
 

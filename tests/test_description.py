@@ -10,13 +10,8 @@ import numpy as np
 import pytest
 
 import model
-from model.description import (
-    BUILTIN_ROBOTS,
-    InertiaConsistencyWarning,
-    RobotDescription,
-    RobotDescriptionError,
-    load_description,
-)
+from model.description import BUILTIN_ROBOTS, InertiaConsistencyWarning, RobotDescription, RobotDescriptionError
+from model.loading import load_description
 
 # A valid two-link robot; each field is the TOML text of its value.
 _LINK = {

@@ -16,7 +16,7 @@ import pinocchio as pin
 import pytest
 
 from model import BUILTIN_ROBOTS, InertiaConsistencyWarning, Robot
-from model.description import load_description
+from model.loading import load_description
 from model.urdf_export import export_urdf
 from references import friction_reference
 from urdf_references import pin_q

@@ -15,7 +15,8 @@ __all__ = ["register"]
 
 
 def _cmd_robots(args: argparse.Namespace) -> int:
-    from model.description import BUILTIN_ROBOTS, load_description
+    from model.description import BUILTIN_ROBOTS
+    from model.loading import load_description
 
     for name in BUILTIN_ROBOTS:
         desc = load_description(name)
@@ -24,7 +25,7 @@ def _cmd_robots(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from model.description import load_description
+    from model.loading import load_description
 
     from .formatting import format_info
 
@@ -44,7 +45,7 @@ def _cmd_build(args: argparse.Namespace) -> int:
 
 
 def _cmd_export_urdf(args: argparse.Namespace) -> int:
-    from model.description import load_description
+    from model.loading import load_description
     from model.urdf_export import export_urdf
 
     out_file(args.output, "--output")
