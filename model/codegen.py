@@ -42,6 +42,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from functools import lru_cache
@@ -58,6 +59,7 @@ __all__ = [
     "BASE_CFLAGS",
     "BuildEvent",
     "BuildInfo",
+    "CacheFallbackWarning",
     "CASADI_INT",
     "CASADI_REAL",
     "CompileError",
@@ -206,10 +208,43 @@ class BuildInfo:
         return sum(u.c_bytes for u in self.units)
 
 
+class CacheFallbackWarning(RuntimeWarning):
+    """The cache folder cannot be written; a temporary folder (gone at exit) is used instead."""
+
+
+#: Unwritable cache folder -> the temporary folder used instead (one warning per folder and process).
+_FALLBACK_CACHE: dict[Path, tempfile.TemporaryDirectory] = {}
+
+
+def _writable_dir(folder: Path) -> str | None:
+    """None if files can be created in ``folder`` (made if missing), else the reason."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".probe-")
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    os.close(fd)
+    os.unlink(probe)
+    return None
+
+
 def cache_dir() -> Path:
-    """The cache folder: ``$MANIP_CACHE_DIR`` or ``~/.cache/manipulator-workbench``."""
+    """The cache folder: ``$MANIP_CACHE_DIR`` or ``~/.cache/manipulator-workbench``.
+
+    When it cannot be written, a temporary folder of this process is used instead,
+    with a one-line :class:`CacheFallbackWarning` (the build is then not cached).
+    """
     env = os.environ.get("MANIP_CACHE_DIR")
-    return Path(env) if env else Path.home() / ".cache" / "manipulator-workbench"
+    folder = Path(env) if env else Path.home() / ".cache" / "manipulator-workbench"
+    if folder not in _FALLBACK_CACHE:
+        reason = _writable_dir(folder)
+        if reason is None:
+            return folder
+        _FALLBACK_CACHE[folder] = tempfile.TemporaryDirectory(prefix="manip-cache-")
+        warnings.warn(f"cache {str(folder)!r} ({'MANIP_CACHE_DIR' if env else 'default'}) is not writable ({reason}); "
+                      f"using the temporary cache {_FALLBACK_CACHE[folder].name!r} for this run",
+                      CacheFallbackWarning, stacklevel=2)
+    return Path(_FALLBACK_CACHE[folder].name)
 
 
 def find_compiler() -> str:

@@ -21,7 +21,7 @@ from . import cmd_design, cmd_fmu, cmd_model, cmd_track
 from .args import UsageError
 from .outputs import out_dir
 
-__all__ = ["main", "build_parser", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED"]
+__all__ = ["main", "build_parser", "one_line", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
 #: Exit status of an expected error (bad input, failed build): argparse's own.
 EXIT_USAGE = 2
@@ -64,6 +64,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def one_line(exc: BaseException, limit: int = 400) -> str:
+    """The message of ``exc`` on one line: its first line and the first line of any detail that follows.
+
+    A failed compile carries the command and the compiler's output on later lines;
+    the first diagnostic is kept, the rest is dropped.
+    """
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    if not lines:
+        return type(exc).__name__
+    text = lines[0].rstrip(":")
+    if len(lines) > 1:
+        text += f": {lines[1]}"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"manip: warning: {message}\n"
 
@@ -77,7 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except WorkbenchError as exc:
-        print(f"manip {args.command}: error: {exc}", file=sys.stderr)
+        print(f"manip {args.command}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"manip {args.command}: interrupted", file=sys.stderr)
