@@ -143,7 +143,7 @@ def test_readme_documents_the_cache_folder():
 
 def test_ctrl_c_exits_130_and_leaves_no_partial_file(tmp_path):
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", "track", "planar2r", "--out", str(out)],
+    proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", "track", "scara", "--out", str(out)],
                             cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     # wait until the command works (the output folder is made after the arguments are checked), then interrupt
     deadline = time.monotonic() + 120
