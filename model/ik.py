@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .closed_form import (
     IKSolution,
@@ -58,6 +57,8 @@ def pose_error(T: np.ndarray, T_d: np.ndarray) -> np.ndarray:
     ``[p_d - p; w]`` with ``w`` the rotation vector (angle-axis, log map) of
     ``R_d R^T``: the rotation that takes ``R`` to ``R_d``, base-frame axes. m, rad.
     """
+    from scipy.spatial.transform import Rotation  # scipy is imported by the functions that use it
+
     e = np.empty(6)
     e[:3] = T_d[:3, 3] - T[:3, 3]
     e[3:] = Rotation.from_matrix(T_d[:3, :3] @ T[:3, :3].T).as_rotvec()

@@ -16,7 +16,6 @@ import numpy as np
 
 from .arrays import as_joint_vector, finite_vector
 from .description import RobotDescription
-from .kinematics import KinematicsFunctions, build_kinematics
 from .loading import load_description
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -24,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .dynamics import Dynamics, DynamicsParameters, Workspace
     from .ik import IKResult, IKSolution
+    from .kinematics import KinematicsFunctions
     from .singularity import SingularityReport
 
 __all__ = ["Robot", "load_robot"]
@@ -98,6 +98,8 @@ class Robot:
     @cached_property
     def kinematics(self) -> KinematicsFunctions:
         """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe``."""
+        from .kinematics import build_kinematics  # CasADi: imported when kinematics is first used
+
         return build_kinematics(self.description)
 
     def fkine(self, q: Any) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 Bad values raise :class:`UsageError` (or the control-design error naming the
 flag); :func:`workbench.cli.main` prints them as one line, exit status 2.
+control_design (python-control, matplotlib) is imported inside the functions,
+so that commands that do not design start without it.
 """
 
 from __future__ import annotations
@@ -9,14 +11,9 @@ from __future__ import annotations
 import argparse
 import math
 
-from control_design.decentralised import DEFAULT_BANDWIDTH
-from control_design.design import CONTROLLER_KINDS, DEFAULT_RATE_HZ
 from model.errors import InputError
 
 __all__ = ["UsageError", "add_spec_args", "controller_kind", "finite_or_fail", "positive_float"]
-
-_KINDS_TEXT = "{" + ",".join(CONTROLLER_KINDS) + "}"
-
 
 class UsageError(InputError):
     """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
@@ -24,6 +21,7 @@ class UsageError(InputError):
 
 def controller_kind(value: str) -> str:
     """``value`` if it names a controller kind, else :class:`~control_design.errors.UnknownControllerError`."""
+    from control_design.design import CONTROLLER_KINDS
     from control_design.errors import UnknownControllerError
 
     if value not in CONTROLLER_KINDS:
@@ -53,9 +51,17 @@ def positive_float(text: str) -> float:
 
 
 def add_spec_args(p: argparse.ArgumentParser) -> None:
-    """The robot and design-specification arguments of ``manip design`` and ``manip track``."""
+    """The robot and design-specification arguments of ``manip design`` and ``manip track``.
+
+    The defaults are control_design's own, so this imports it (python-control):
+    :func:`workbench.cli.build_parser` calls it only for the command being run or for help.
+    """
+    from control_design.decentralised import DEFAULT_BANDWIDTH
+    from control_design.design import CONTROLLER_KINDS, DEFAULT_RATE_HZ
+
+    kinds = "{" + ",".join(CONTROLLER_KINDS) + "}"
     p.add_argument("robot", help="built-in robot name or TOML file")
-    p.add_argument("--controller", default="pd", metavar=_KINDS_TEXT,
+    p.add_argument("--controller", default="pd", metavar=kinds,
                    help="pd, pd-g (PD + gravity compensation), pid, pd-ff (PD + decoupled feed-forward), "
                         "ct (computed torque); default pd")
     p.add_argument("--bandwidth", type=float, default=DEFAULT_BANDWIDTH, metavar="RAD_S",

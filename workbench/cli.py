@@ -46,13 +46,18 @@ def _version() -> str:
         return "unknown (not installed)"
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``manip`` parser; with ``only`` a command name, the other commands get their name and help only.
+
+    The design arguments read control_design's defaults (python-control); ``only``
+    keeps ``manip robots`` and ``manip info`` from importing it.
+    """
     parser = argparse.ArgumentParser(prog="manip", description="Model, control and export robot manipulators.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     cmd_model.register(sub)
-    cmd_design.register(sub)
-    cmd_track.register(sub)
+    cmd_design.register(sub, full=only in (None, "design"))
+    cmd_track.register(sub, full=only in (None, "track"))
     cmd_fmu.register(sub)
     p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")
     p.add_argument("--robot", default="scara", help="built-in name or TOML file (default scara)")
@@ -85,8 +90,9 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``manip`` console command; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
+    args = build_parser(only=command).parse_args(argv)
     previous = warnings.formatwarning
     warnings.formatwarning = _one_line_warning
     try:

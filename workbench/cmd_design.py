@@ -63,8 +63,9 @@ def run_design(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers: Any) -> None:
-    """Add the ``design`` sub-command to ``manip``'s sub-parsers."""
+def register(subparsers: Any, full: bool = True) -> None:
+    """Add the ``design`` sub-command to ``manip``'s sub-parsers (``full=False``: its name and help only)."""
     p = subparsers.add_parser("design", help="design joint loops (decentralised or computed torque): margins, Bode, steps")
-    add_spec_args(p)
     p.set_defaults(func=run_design)
+    if full:
+        add_spec_args(p)

@@ -92,9 +92,12 @@ def run_track(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers: Any) -> None:
-    """Add the ``track`` sub-command to ``manip``'s sub-parsers."""
+def register(subparsers: Any, full: bool = True) -> None:
+    """Add the ``track`` sub-command to ``manip``'s sub-parsers (``full=False``: its name and help only)."""
     p = subparsers.add_parser("track", help="simulate closed-loop tracking of a task on the nonlinear model")
+    p.set_defaults(func=run_track)
+    if not full:
+        return
     add_spec_args(p)
     src = p.add_mutually_exclusive_group()
     src.add_argument("--task", default="pick-and-place", help="built-in task (default pick-and-place)")
