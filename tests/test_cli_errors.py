@@ -38,15 +38,11 @@ def _error_classes() -> list[type]:
         for path in sorted((REPO / pkg).rglob("*.py")):
             parts = list(path.relative_to(REPO).with_suffix("").parts)
             name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-            if name in ("workbench.demo", "workbench.animation"):
-                continue  # import matplotlib's animation machinery; define no errors (checked below by text)
             module = importlib.import_module(name)
             for obj in vars(module).values():
                 if (inspect.isclass(obj) and issubclass(obj, BaseException) and not issubclass(obj, Warning)
                         and obj.__module__ == name):
                     found[f"{name}.{obj.__name__}"] = obj
-    for name in ("workbench/demo.py", "workbench/animation.py"):
-        assert "Error(" not in "".join(line for line in (REPO / name).read_text().splitlines() if line.startswith("class "))
     return sorted(found.items())
 
 
