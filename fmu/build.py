@@ -36,7 +36,7 @@ from typing import Any, Callable
 import casadi as ca
 
 from model.codegen import CompilerNotFoundError, compile_flags, compile_objects, find_compiler, generate_c
-from model.errors import ToolchainError
+from model.errors import InputError, ToolchainError
 from model.files import atomic_path
 
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
@@ -179,7 +179,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
     """Generate, compile and zip the FMU of ``spec`` into ``path``."""
     path = Path(path)
     if path.suffix != ".fmu":
-        raise ValueError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
+        raise InputError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
     platform_dir = binary_platform()
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_") as tmp:

@@ -117,7 +117,7 @@ def feedforward_profile(robot: Any, t_end: float = 3.0, hold: float = 0.01) -> T
 
     k = int(round(t_end / hold))
     if k < 1 or abs(k * hold - t_end) > 1e-9 * t_end:
-        raise ValueError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
+        raise InputError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
     if robot.name == PICK_AND_PLACE.robot:
         traj = pick_and_place(robot.description)
         what = "pick-and-place of seed 000 (first segment: rest to A)"
@@ -207,14 +207,14 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
 
 
 def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
-    """The ``modelDescription.xml`` of an FMU; ValueError names the file if it is not an FMU."""
+    """The ``modelDescription.xml`` of an FMU; InputError (a ValueError) names the file if it is not an FMU."""
     if not Path(fmu_path).is_file():
-        raise ValueError(f"not an FMU: {fmu_path} is not a file")
+        raise InputError(f"not an FMU: {fmu_path} is not a file")
     if not zipfile.is_zipfile(fmu_path):
-        raise ValueError(f"not an FMU: {fmu_path} is not a zip archive")
+        raise InputError(f"not an FMU: {fmu_path} is not a zip archive")
     with zipfile.ZipFile(fmu_path) as zf:
         if "modelDescription.xml" not in zf.namelist():
-            raise ValueError(f"not an FMU: {fmu_path} has no modelDescription.xml")
+            raise InputError(f"not an FMU: {fmu_path} has no modelDescription.xml")
         return zf.read("modelDescription.xml")
 
 
