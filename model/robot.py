@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from .arrays import as_joint_vector, finite_vector
+from .arrays import as_joint_vector
 from .description import RobotDescription
 from .loading import load_description
 
