@@ -156,20 +156,25 @@ def test_readme_documents_the_cache_folder():
 @pytest.mark.parametrize("argv", [["track", "scara"], ["demo", "--robot", "scara", "--no-gif"]])
 def test_ctrl_c_exits_130_and_leaves_no_partial_file(tmp_path, argv):
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", *argv, "--out", str(out)],
-                            cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    # wait until the command works (the output folder is made after the arguments are checked), then interrupt
-    deadline = time.monotonic() + 120
-    while not out.exists() and time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.1)
-    time.sleep(2.0)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
+    log_out, log_err = tmp_path / "stdout.txt", tmp_path / "stderr.txt"
+    with open(log_out, "w") as fo, open(log_err, "w") as fe:
+        proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", *argv, "--out", str(out)], cwd=REPO,
+                                stdout=fo, stderr=fe, text=True)
+        # wait until the command reports work (a progress line), then interrupt it about 2 s later
+        deadline = time.monotonic() + 120
+        while (log_out.stat().st_size + log_err.stat().st_size == 0 and time.monotonic() < deadline
+               and proc.poll() is None):
+            time.sleep(0.1)
+        time.sleep(2.0)
+        assert proc.poll() is None, log_err.read_text()  # still working when interrupted
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=120)
+    err = log_err.read_text()
     assert proc.returncode == 130, err
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == f"manip {argv[0]}: interrupted"
-    leftovers = [p.name for p in out.rglob("*") if ".tmp" in p.name or p.name.startswith(".")]
-    assert leftovers == []
+    files = list(out.rglob("*")) if out.exists() else []
+    assert [p.name for p in files if ".tmp" in p.name or p.name.startswith(".")] == []
     for path in out.rglob("*.json"):
         json.loads(path.read_text())  # complete, or it would not parse
     for path in out.rglob("*.png"):

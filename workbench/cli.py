@@ -19,7 +19,7 @@ from model.errors import WorkbenchError
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_track
 from .args import UsageError
-from .outputs import out_dir
+from .outputs import check_out_dir
 
 __all__ = ["main", "build_parser", "one_line", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED"]
 
@@ -32,7 +32,7 @@ EXIT_INTERRUPTED = 130
 def _cmd_demo(args: argparse.Namespace) -> int:
     if not (args.bandwidth > 0 and args.rate > 0):
         raise UsageError(f"--bandwidth and --rate: expected positive numbers, got {args.bandwidth!r} and {args.rate!r}")
-    out_dir(args.out)
+    check_out_dir(args.out)
     from .demo import run_demo  # heavy: FMU export, simulations, plots
 
     result = run_demo(args.robot, args.out, bandwidth=args.bandwidth, rate_hz=args.rate, gif=not args.no_gif)

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .args import add_spec_args, controller_kind, finite_or_fail
-from .outputs import out_dir, save_figure, write_json
+from .outputs import check_out_dir, out_dir, save_figure, write_json
 
 if TYPE_CHECKING:
     from control_design.design import RobotDesign
@@ -46,9 +46,10 @@ def run_design(args: argparse.Namespace) -> int:
 
     kind = controller_kind(args.controller)
     finite_or_fail(args.rate, "--rate")
-    out = out_dir(args.out)
+    check_out_dir(args.out)
     robot = load_robot(args.robot)
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate)
+    out = out_dir(args.out)
     write_json(out / "design.json", design.to_dict())
     assert design.reports is not None
     print(f"{robot.name}: {kind} at {args.bandwidth:g} rad/s, {args.rate:g} Hz "

@@ -23,7 +23,7 @@ def _internal_step(text: str) -> float:
 def _cmd_export(args: argparse.Namespace) -> int:
     from fmu.build import export_fmu
 
-    out_file(args.output, "--output")
+    out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
     path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, progress=print)
     print(f"wrote {path}")
     return 0

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .args import add_spec_args, controller_kind, finite_or_fail
-from .outputs import out_dir, save_figure, write_json
+from .outputs import check_out_dir, out_dir, save_figure, write_json
 
 if TYPE_CHECKING:
     from closed_loop.result import TrackingResult
@@ -51,7 +51,7 @@ def run_track(args: argparse.Namespace) -> int:
     finite_or_fail(args.segment_time, "--segment-time")
     if args.payload is not None and not (math.isfinite(args.payload) and args.payload >= 0):
         raise DesignSpecError(f"--payload: expected a mass >= 0 kg, got {args.payload!r}")
-    out = out_dir(args.out)
+    check_out_dir(args.out)
     robot = load_robot(args.robot)
     traj = task_trajectory(robot, args.task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
@@ -63,6 +63,7 @@ def run_track(args: argparse.Namespace) -> int:
     controller = design.controller(args.rate, saturate=not args.no_saturation)
     result = simulate_tracking(plant, controller, traj, progress=ProgressLine("track", sys.stderr))
     met = result.metrics()
+    out = out_dir(args.out)
     data = met.to_dict()
     data.update({
         "task": str(args.waypoints) if args.waypoints else args.task, "duration_s": float(result.t[-1] - result.t[0]),
