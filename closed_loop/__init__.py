@@ -10,7 +10,7 @@ The layer above the design (:mod:`control_design`) and the FMU export
 * :func:`~closed_loop.master.run_libcosim_closed_loop` - both FMUs connected in libcosim;
 * :class:`~closed_loop.delay.OnePeriodDelay` - the Python loop as libcosim's Jacobi coupling runs it;
 * :mod:`~closed_loop.controller_fmu` - the control laws as FMUs;
-* :mod:`~closed_loop.plots` and :mod:`~closed_loop.commands` (``manip track``).
+* :mod:`~closed_loop.plots` (``manip track`` is :mod:`workbench.cmd_track`).
 
 Dependencies point one way: ``model <- control_design <- closed_loop -> fmu``.
 """

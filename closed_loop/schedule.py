@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 
 from control_design.errors import DesignSpecError
-from model.robot import Robot, as_joint_vector
+from model.arrays import as_joint_vector
+from model.robot import Robot
 from model.trajectory import Trajectory
 
 from .result import TrackingResult

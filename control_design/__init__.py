@@ -8,7 +8,7 @@ Bode, steps: result objects) -> :mod:`~control_design.plots` (figures);
 :mod:`~control_design.laws` (each control law once, a CasADi Function) ->
 :mod:`~control_design.controllers` (sampled ``update(t, q, qd, ref) -> tau_m``).
 :mod:`~control_design.design` ties them together for a whole robot and
-:mod:`~control_design.commands` exposes ``manip design``. Closed loops (the
+:mod:`workbench.cmd_design` exposes ``manip design``. Closed loops (the
 nonlinear simulation, FMU masters, ``manip track``) are the layer above,
 :mod:`closed_loop`.
 """

@@ -1,16 +1,20 @@
 """Errors of the control-design package.
 
-Each subclasses a builtin (``ValueError``) so the command line turns it into a
+A bad design request subclasses :class:`model.errors.InputError` (a
+``ValueError``); a diverged simulation is a :class:`model.errors.NumericalError`
+(an ``ArithmeticError``, not bad input). The command line turns either into a
 one-line message and exit status 2; each message names the argument, the value
 received and what was expected.
 """
 
 from __future__ import annotations
 
+from model.errors import InputError, NumericalError
+
 __all__ = ["ControlDesignError", "DesignSpecError", "SamplingRateError", "UnknownControllerError", "TrajectoryLimitError", "SimulationDivergedError"]
 
 
-class ControlDesignError(ValueError):
+class ControlDesignError(InputError):
     """Base class: a control-design request cannot be honoured."""
 
 
@@ -30,5 +34,5 @@ class TrajectoryLimitError(ControlDesignError):
     """A reference trajectory leaves the joint limits of the robot."""
 
 
-class SimulationDivergedError(ControlDesignError):
+class SimulationDivergedError(NumericalError):
     """The closed-loop simulation left finite numbers (an unstable loop)."""

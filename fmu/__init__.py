@@ -7,10 +7,8 @@ against the Python model). It exports and validates any model spec and knows
 nothing of controllers: closed loops through FMUs are :mod:`closed_loop`.
 """
 
-__version__ = "0.1.0"
-
 from .archive import FmuArchiveError, check_fmu_archive
-from .build import FmuBuildError, build_driver, build_fmu, export_fmu, export_trivial_fmu
+from .build import FmuBuildError, build_driver, build_fmu, export_fmu, export_trivial_fmu, tool_version
 from .cosim import CosimError, CosimResult, run_libcosim
 from .simulate import SimulationResult, simulate_cs, simulate_me, step_input
 from .validate import ValidationReport, validate_fmu
@@ -43,5 +41,8 @@ __all__ = [
     "spec_from_plant",
     "step_input",
     "trivial_spec",
+    "tool_version",
     "validate_fmu",
 ]
+
+__version__ = tool_version()

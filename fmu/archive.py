@@ -35,6 +35,7 @@ import zipfile
 from pathlib import Path
 from xml.etree.ElementTree import ParseError
 
+from model.errors import InputError
 from model.limits import (
     FMU_RATIO_FLOOR_BYTES,
     MAX_FMU_MEMBER_BYTES,
@@ -51,7 +52,7 @@ _ALLOWED_COMPRESSION = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED)
 _DRIVE = re.compile(r"^[A-Za-z]:")
 
 
-class FmuArchiveError(ValueError):
+class FmuArchiveError(InputError):
     """An FMU archive breaks a limit or a rule of :mod:`fmu.archive`; the message names the file and the member."""
 
 

@@ -22,6 +22,7 @@ the units are compiled in parallel. No floating-point contraction
 from __future__ import annotations
 
 import hashlib
+import importlib.metadata
 import os
 import platform
 import shutil
@@ -35,11 +36,14 @@ from typing import Any, Callable
 import casadi as ca
 
 from model.codegen import CompilerNotFoundError, compile_flags, compile_objects, find_compiler, generate_c
+from model.errors import InputError, ToolchainError
+from model.files import atomic_path
 
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
 __all__ = [
     "FmuBuildError",
+    "tool_version",
     "C_DIR",
     "CFLAGS",
     "CASADI_CFLAGS",
@@ -68,8 +72,16 @@ STAMP = "generated, do not edit"
 Progress = Callable[[str], None]
 
 
-class FmuBuildError(RuntimeError):
+class FmuBuildError(ToolchainError):
     """Generating or compiling an FMU failed; the message carries the compiler's output."""
+
+
+def tool_version() -> str:
+    """The workbench's version, from the installed package metadata (written into modelDescription.xml)."""
+    try:
+        return importlib.metadata.version("manipulator-workbench")
+    except importlib.metadata.PackageNotFoundError:  # a source tree that was never installed
+        return "0+unknown"
 
 
 def fmi_headers_dir() -> Path:
@@ -167,7 +179,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
     """Generate, compile and zip the FMU of ``spec`` into ``path``."""
     path = Path(path)
     if path.suffix != ".fmu":
-        raise ValueError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
+        raise InputError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
     platform_dir = binary_platform()
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_") as tmp:
@@ -178,21 +190,17 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progre
         _say(progress, f"compiling with {_compiler()} " + " ".join(CFLAGS))
         binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
         _compile(sources, c_files, binary, Path(tmp) / "obj")
-        from . import __version__
-
-        (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, __version__))
+        (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, tool_version()))
         if spec.robot_json:
             from .robot_resource import ROBOT_RESOURCE
 
             (root / ROBOT_RESOURCE).parent.mkdir(parents=True, exist_ok=True)
             (root / ROBOT_RESOURCE).write_text(spec.robot_json)
         _say(progress, f"writing {path}")
-        tmp_fmu = Path(tmp) / path.name
-        with zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
+        with atomic_path(path) as tmp_fmu, zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
             for file in sorted(root.rglob("*")):
                 if file.is_file():
                     zf.write(file, file.relative_to(root).as_posix())
-        shutil.move(str(tmp_fmu), path)
     return path
 
 

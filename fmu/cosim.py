@@ -16,6 +16,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .archive import check_fmu_archive
+from model.errors import ToolchainError
 
 __all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "add_slave", "last_error", "libcosim_unavailable",
            "run_libcosim"]
@@ -23,7 +24,7 @@ __all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "add_slave",
 NS_PER_S = 1_000_000_000
 
 
-class CosimError(RuntimeError):
+class CosimError(ToolchainError):
     """libcosim refused a call (load, add, connect, step); the message says which and why."""
 
 

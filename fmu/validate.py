@@ -35,6 +35,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .archive import MODEL_DESCRIPTION, check_fmu_archive
+from model.errors import InputError
 
 __all__ = [
     "TOLERANCES",
@@ -125,7 +126,7 @@ def feedforward_profile(robot: Any, t_end: float = 3.0, hold: float = 0.01) -> T
 
     k = int(round(t_end / hold))
     if k < 1 or abs(k * hold - t_end) > 1e-9 * t_end:
-        raise ValueError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
+        raise InputError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
     tasks = robot_tasks(robot.description)
     if tasks:
         task = next(iter(tasks.values()))
@@ -256,7 +257,7 @@ def fmu_robot_digest(fmu_path: str | os.PathLike[str]) -> str | None:
     return None if node is None else node.get("digest") or None
 
 
-class RobotNotReloadableError(ValueError):
+class RobotNotReloadableError(InputError):
     """The robot recorded in an FMU does not load again as the robot the FMU was built from."""
 
 
@@ -277,7 +278,7 @@ def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
         not a built-in robot.
     """
     from model import Robot
-    from model.description import load_description
+    from model.loading import load_description
 
     from .robot_resource import read_robot_resource
 

@@ -1,15 +1,15 @@
-"""Robot description, kinematics, inverse kinematics, trajectories and dynamics of serial arms."""
+"""Robot description, kinematics, inverse kinematics, trajectories and dynamics of serial arms.
+
+Importing the package reads no symbolic library: CasADi is imported by the
+modules that build symbolic functions (:mod:`model.kinematics`,
+:mod:`model.dynamics`, ...) when a robot first uses them, so ``manip robots``
+and ``manip info`` start fast. The dynamics class is :class:`model.dynamics.Dynamics`.
+"""
 
 from .chain import Chain, build_chain
-from .description import (
-    BUILTIN_ROBOTS,
-    InertiaConsistencyWarning,
-    LinkDescription,
-    RobotDescription,
-    RobotDescriptionError,
-    load_description,
-)
-from .dynamics import Dynamics
+from .description import BUILTIN_ROBOTS, InertiaConsistencyWarning, LinkDescription, RobotDescription, RobotDescriptionError
+from .errors import InputError, NumericalError, ToolchainError, WorkbenchError
+from .loading import load_description
 from .clik import CLIKResult, clik, seed_clik_task
 from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
 from .robot import Robot, load_robot
@@ -23,7 +23,10 @@ __all__ = [
     "find_task",
     "robot_tasks",
     "CLIKResult",
-    "Dynamics",
+    "InputError",
+    "NumericalError",
+    "ToolchainError",
+    "WorkbenchError",
     "IKResult",
     "IKSolution",
     "NoClosedFormError",

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["shaped_vector", "finite_vector"]
+__all__ = ["as_joint_vector", "shaped_vector", "finite_vector"]
 
 
 def shaped_vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
@@ -30,3 +30,8 @@ def finite_vector(value: Any, size: int, name: str, what: str = "values") -> np.
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
     return np.ascontiguousarray(arr)
+
+
+def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
+    """``value`` as a finite float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
+    return finite_vector(value, n, name, "joint values")

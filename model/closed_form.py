@@ -39,6 +39,7 @@ from typing import ClassVar
 import numpy as np
 
 from .description import RobotDescription
+from .errors import InputError, WorkbenchError
 
 __all__ = [
     "IKSolution",
@@ -72,11 +73,11 @@ _COS_TOL = 1e-9
 _TWO_PI = 2.0 * math.pi
 
 
-class WorkspaceError(ValueError):
+class WorkspaceError(InputError):
     """The target pose is outside the robot's workspace; the message names the target and why."""
 
 
-class NoClosedFormError(LookupError):
+class NoClosedFormError(WorkbenchError, LookupError):
     """The robot's structure has no closed-form inverse kinematics here; the message names the robot."""
 
 

@@ -37,7 +37,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .limits import MAX_JOINTS, MAX_WAYPOINTS, load_toml
+from .errors import InputError
+from .limits import MAX_JOINTS, MAX_WAYPOINTS
 
 __all__ = [
     "CONVENTIONS",
@@ -46,7 +47,6 @@ __all__ = [
     "RobotDescription",
     "RobotDescriptionError",
     "InertiaConsistencyWarning",
-    "load_description",
     "description_from_dict",
     "BUILTIN_DIR",
     "BUILTIN_ROBOTS",
@@ -76,7 +76,7 @@ SI_UNITS: dict[str, tuple[str, ...]] = {
 }
 
 
-class RobotDescriptionError(ValueError):
+class RobotDescriptionError(InputError):
     """A robot description is invalid; the message names file, link, field, value and expectation."""
 
 
@@ -484,26 +484,3 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
         path=str(path), convention=convention, base=base, tool=tool,
         extra=types.MappingProxyType(extra),
     )
-
-
-def load_description(name_or_path: str | Path) -> RobotDescription:
-    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`), a TOML file or a ``.urdf`` file by path."""
-    text_name = str(name_or_path)
-    if text_name in BUILTIN_ROBOTS:
-        path = BUILTIN_DIR / f"{text_name}.toml"
-    else:
-        path = Path(name_or_path)
-        if not path.is_file():
-            raise RobotDescriptionError(
-                f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; no such file"
-            )
-    if path.suffix.lower() == ".urdf":
-        from .urdf import description_from_urdf
-
-        return description_from_urdf(path)
-    data = load_toml(path, "robot file", RobotDescriptionError)
-    if "urdf" in data:  # a TOML that points at a URDF and adds what URDF lacks
-        from .urdf import description_from_urdf_toml
-
-        return description_from_urdf_toml(data, path)
-    return description_from_dict(data, str(path))

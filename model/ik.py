@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .closed_form import (
     IKSolution,
@@ -24,7 +23,7 @@ from .closed_form import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .robot import Robot
+    from .arm import KinematicArm
 
 __all__ = [
     "IKSolution",
@@ -58,6 +57,8 @@ def pose_error(T: np.ndarray, T_d: np.ndarray) -> np.ndarray:
     ``[p_d - p; w]`` with ``w`` the rotation vector (angle-axis, log map) of
     ``R_d R^T``: the rotation that takes ``R`` to ``R_d``, base-frame axes. m, rad.
     """
+    from scipy.spatial.transform import Rotation  # scipy is imported by the functions that use it
+
     e = np.empty(6)
     e[:3] = T_d[:3, 3] - T[:3, 3]
     e[3:] = Rotation.from_matrix(T_d[:3, :3] @ T[:3, :3].T).as_rotvec()
@@ -67,7 +68,7 @@ def pose_error(T: np.ndarray, T_d: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- closed form
 
 
-def ikine_a(robot: "Robot", T: np.ndarray) -> list[IKSolution]:
+def ikine_a(robot: "KinematicArm", T: np.ndarray) -> list[IKSolution]:
     """Every closed-form inverse-kinematics solution of pose ``T``.
 
     Parameters
@@ -144,7 +145,7 @@ def _aligned(desc) -> bool:
     return bool(np.array_equal(desc.T_tool, np.eye(4)) and np.allclose(desc.T_base[:3, 2], [0.0, 0.0, 1.0], atol=1e-12))
 
 
-def default_mask(robot: "Robot") -> np.ndarray:
+def default_mask(robot: "KinematicArm") -> np.ndarray:
     """(6,) default ``ikine`` weights on [x y z rx ry rz] for ``robot``.
 
     The task of a recognised structure (e.g. x, y, z, yaw for a SCARA) when its rows are
@@ -175,7 +176,7 @@ def _check_mask(mask: Sequence[float]) -> np.ndarray:
 
 
 def ikine(
-    robot: "Robot",
+    robot: "KinematicArm",
     T: np.ndarray,
     q0: np.ndarray | None = None,
     mask: Sequence[float] | None = None,
@@ -269,7 +270,7 @@ def ikine(
                     residual=math.sqrt(best_E), reason=_failure_reason(robot, T, best_q, W, best_E, tol, slimit, ilimit))
 
 
-def _tidy(robot: "Robot", q: np.ndarray, joint_limits: bool) -> np.ndarray:
+def _tidy(robot: "KinematicArm", q: np.ndarray, joint_limits: bool) -> np.ndarray:
     """Revolute joints without limits wrapped to [-pi, pi]; others as found."""
     q = q.copy()
     for i, lk in enumerate(robot.description.links):
@@ -278,7 +279,7 @@ def _tidy(robot: "Robot", q: np.ndarray, joint_limits: bool) -> np.ndarray:
     return q
 
 
-def _failure_reason(robot: "Robot", T: np.ndarray, q: np.ndarray, W: np.ndarray, E: float,
+def _failure_reason(robot: "KinematicArm", T: np.ndarray, q: np.ndarray, W: np.ndarray, E: float,
                     tol: float, slimit: int, ilimit: int) -> str:
     e = pose_error(robot.fkine(q), T)
     pos = float(np.linalg.norm(np.sqrt(W[:3]) * e[:3]))

@@ -26,8 +26,9 @@ import casadi as ca
 import control
 import numpy as np
 
+from .arm import DynamicArm
+from .arrays import as_joint_vector
 from .plant import build_plant
-from .robot import Robot, as_joint_vector
 
 __all__ = ["linearise", "OUTPUT_KINDS"]
 
@@ -49,7 +50,7 @@ _BUILT: "weakref.WeakKeyDictionary[Any, _Linearisation]" = weakref.WeakKeyDictio
 _LOCK = threading.Lock()
 
 
-def _linearisation(robot: Robot) -> _Linearisation:
+def _linearisation(robot: DynamicArm) -> _Linearisation:
     """The cached :class:`_Linearisation` of ``robot``; built (plant, then exact Jacobians) on first use."""
     with _LOCK:
         built = _BUILT.get(robot.dynamics)
@@ -66,7 +67,7 @@ def _linearisation(robot: Robot) -> _Linearisation:
         return built
 
 
-def _output_matrix(robot: Robot, outputs: str | Sequence[str] | Any) -> tuple[np.ndarray, list[str]]:
+def _output_matrix(robot: DynamicArm, outputs: str | Sequence[str] | Any) -> tuple[np.ndarray, list[str]]:
     n = robot.n
     G = robot.gear_ratio
     if isinstance(outputs, str):
@@ -93,7 +94,7 @@ def _output_matrix(robot: Robot, outputs: str | Sequence[str] | Any) -> tuple[np
     return C, [f"y[{i}]" for i in range(1, C.shape[0] + 1)]
 
 
-def linearise(robot: Robot, q0: Any, qd0: Any = None, u0: Any = None, outputs: str | Sequence[str] | Any = "q") -> control.StateSpace:
+def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outputs: str | Sequence[str] | Any = "q") -> control.StateSpace:
     """Linear model ``dx = A dx + B du``, ``dy = C dx`` of ``robot`` about ``(q0, qd0, u0)``.
 
     Parameters

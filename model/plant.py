@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .robot import Robot
+from .arm import DynamicArm
 
 __all__ = ["Plant", "build_plant", "rpy_zyx_sx"]
 
@@ -76,7 +76,7 @@ def rpy_zyx_sx(R: ca.SX) -> ca.SX:
     return ca.vertcat(roll, pitch, yaw)
 
 
-def build_plant(robot: Robot) -> Plant:
+def build_plant(robot: DynamicArm) -> Plant:
     """The plant of ``robot`` (its motor model included), built from ``robot.dynamics`` and ``robot.kinematics``."""
     n = robot.n
     desc = robot.description

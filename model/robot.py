@@ -14,23 +14,19 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from .arrays import finite_vector
-from .description import RobotDescription, load_description
-from .kinematics import KinematicsFunctions, build_kinematics
+from .arrays import as_joint_vector
+from .description import RobotDescription
+from .loading import load_description
 
 if TYPE_CHECKING:  # pragma: no cover
     import control
 
     from .dynamics import Dynamics, DynamicsParameters, Workspace
     from .ik import IKResult, IKSolution
+    from .kinematics import KinematicsFunctions
     from .singularity import SingularityReport
 
-__all__ = ["Robot", "load_robot", "as_joint_vector"]
-
-
-def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
-    """``value`` as a finite float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
-    return finite_vector(value, n, name, "joint values")
+__all__ = ["Robot", "load_robot"]
 
 
 def _as_pose(T: Any) -> np.ndarray:
@@ -102,6 +98,8 @@ class Robot:
     @cached_property
     def kinematics(self) -> KinematicsFunctions:
         """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe``."""
+        from .kinematics import build_kinematics  # CasADi: imported when kinematics is first used
+
         return build_kinematics(self.description)
 
     def fkine(self, q: Any) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 from .closed_form import chain_jacobian, closed_form_for, joint_values
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .robot import Robot
+    from .arm import KinematicArm
 
 __all__ = ["SingularityReport", "manipulability", "singularities", "task_jacobian", "AXES"]
 
@@ -25,7 +25,7 @@ _ROW_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 AXES = {"all": (0, 1, 2, 3, 4, 5), "trans": (0, 1, 2), "rot": (3, 4, 5)}
 
 
-def task_jacobian(robot: "Robot", q: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
+def task_jacobian(robot: "KinematicArm", q: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
     """(m, n) task Jacobian at ``q`` and the names of its m rows.
 
     The recognised structure's task rows (e.g. ``("x", "y", "z", "rz")`` for a
@@ -39,7 +39,7 @@ def task_jacobian(robot: "Robot", q: np.ndarray) -> tuple[np.ndarray, tuple[str,
     return form.task_jacobian(chain_jacobian(robot.description, robot.fkine(q), J0)), form.task_labels
 
 
-def _rows(robot: "Robot", q: np.ndarray, axes: Sequence[bool] | str) -> np.ndarray:
+def _rows(robot: "KinematicArm", q: np.ndarray, axes: Sequence[bool] | str) -> np.ndarray:
     if isinstance(axes, str):
         if axes == "task":
             return task_jacobian(robot, q)[0]
@@ -52,7 +52,7 @@ def _rows(robot: "Robot", q: np.ndarray, axes: Sequence[bool] | str) -> np.ndarr
     return robot.jacob0(q)[mask.astype(bool)]
 
 
-def manipulability(robot: "Robot", q: np.ndarray, axes: Sequence[bool] | str = "task") -> float:
+def manipulability(robot: "KinematicArm", q: np.ndarray, axes: Sequence[bool] | str = "task") -> float:
     """Yoshikawa manipulability ``sqrt(det(J J^T))`` of selected rows J of ``jacob0(q)``.
 
     Parameters
@@ -113,7 +113,7 @@ class SingularityReport:
     reasons: list[str]
 
 
-def singularities(robot: "Robot", q: np.ndarray, tol: float = 1e-6) -> SingularityReport:
+def singularities(robot: "KinematicArm", q: np.ndarray, tol: float = 1e-6) -> SingularityReport:
     """Singularity report of ``robot`` at ``q`` (n,), rad or m.
 
     A singular value counts as zero when it is at most ``tol`` times the largest.

@@ -34,8 +34,10 @@ from typing import Any, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .description import InertiaConsistencyWarning, RobotDescription, load_description
+from .description import InertiaConsistencyWarning, RobotDescription
+from .errors import InputError
 from .limits import MAX_WAYPOINTS, load_toml, read_bounded
+from .loading import load_description
 from .trajectory import Trajectory, via_points
 
 __all__ = [
@@ -56,7 +58,7 @@ __all__ = [
 #: Name of the generic task every robot has (:func:`tour`).
 TOUR = "tour"
 
-class WaypointError(ValueError):
+class WaypointError(InputError):
     """Waypoints are unreadable or invalid for the robot; the message names the source, row and joint."""
 
 
@@ -337,12 +339,11 @@ def load_waypoints(path: str | Path, robot: str | Path | RobotDescription = "sca
         Naming the file, the row and the joint: wrong joint count, not a number,
         NaN/inf, outside qlim; bad TOML; an unknown file type; a file above
         :data:`model.limits.MAX_FILE_BYTES` or with more than :data:`model.limits.MAX_WAYPOINTS` rows.
-    FileNotFoundError
-        If ``path`` does not exist.
+        Also when ``path`` does not exist.
     """
     p = Path(path)
     if not p.is_file():
-        raise FileNotFoundError(f"{p}: no such waypoint file")
+        raise WaypointError(f"{p}: no such waypoint file")
     suffix = p.suffix.lower()
     file_time: Any = None
     description = f"waypoints from {p.name}"

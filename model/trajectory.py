@@ -34,7 +34,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial.transform import Rotation
 
 __all__ = [
     "Trajectory",
@@ -724,6 +723,8 @@ class CartesianPath:
         self.T0 = _readonly(_as_pose(T0, "T0"))
         self.T1 = _readonly(_as_pose(T1, "T1"))
         self.line = StraightLine(self.T0[:3, 3], self.T1[:3, 3], T, t0, profile)
+        from scipy.spatial.transform import Rotation  # scipy is imported by the functions that use it
+
         R0, R1 = self.T0[:3, :3], self.T1[:3, :3]
         self._r = Rotation.from_matrix(R0.T @ R1).as_rotvec()  # rotation vector in frame 0 axes, rad
         self._r_0 = R0 @ self._r  # the same axis in base axes
@@ -742,6 +743,8 @@ class CartesianPath:
         """At the (N,) times ``t``: poses (N, 4, 4), v, w (N, 3), and their derivatives vd, wd (N, 3)."""
         p, v, vd = self.line.batch(t)
         s, sd, sdd = self.line.law.batch(t)
+        from scipy.spatial.transform import Rotation
+
         R0, R1 = self.T0[:3, :3], self.T1[:3, :3]
         R = R0 @ Rotation.from_rotvec(s * self._r).as_matrix()
         R[s[:, 0] == 0.0] = R0

@@ -15,15 +15,16 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from .chain import build_chain
 from .description import RobotDescription
+from .errors import InputError
+from .files import write_atomic
 
-__all__ = ["urdf_text", "companion_toml", "write_atomic", "export_urdf"]
+__all__ = ["urdf_text", "companion_toml", "export_urdf"]
 
 
 def _joint_names(desc: RobotDescription) -> list[str]:
@@ -98,32 +99,18 @@ def companion_toml(desc: RobotDescription, urdf_name: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_atomic(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
 def export_urdf(desc: RobotDescription, path: str | Path, toml: str | Path | None = None) -> list[Path]:
     """Write ``desc`` as URDF to ``path`` and, if ``toml`` is given, the companion robot TOML; returns the files.
 
     Raises
     ------
-    FileNotFoundError
+    model.errors.InputError
         The output folder does not exist.
     """
     path = Path(path)
     for target in (path, *(() if toml is None else (Path(toml),))):
         if not target.parent.is_dir():
-            raise FileNotFoundError(f"{target}: the folder {target.parent} does not exist")
+            raise InputError(f"{target}: the folder {target.parent} does not exist")
     written = [write_atomic(path, urdf_text(desc))]
     if toml is not None:
         toml = Path(toml)

@@ -32,7 +32,8 @@ import pytest
 
 from model import InertiaConsistencyWarning, Robot
 from model.chain import dh_standard
-from model.description import description_from_dict, load_description, rpy_matrix
+from model.description import description_from_dict, rpy_matrix
+from model.loading import load_description
 from model.dynamics.lagrange import lagrange_model
 from model.dynamics.newton_euler import rne_sx
 from model.dynamics.parameters import parameter_layout, split_parameters

@@ -16,8 +16,8 @@ from model.description import (
     RobotDescription,
     RobotDescriptionError,
     description_from_dict,
-    load_description,
 )
+from model.loading import load_description
 
 # A valid two-link robot; each field is the TOML text of its value.
 _LINK = {

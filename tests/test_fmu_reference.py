@@ -85,7 +85,8 @@ def test_planar2r_joint_sticks_and_slips_within_the_friction_limits(tmp_path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from model.description import BUILTIN_DIR, load_description
+    from model.description import BUILTIN_DIR
+    from model.loading import load_description
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)

@@ -19,7 +19,8 @@ import pytest
 
 from model import load_robot
 from model.closed_form import POSE_TOL, Arm4, Scara, SphericalRRP, closed_form_for
-from model.description import description_from_dict, load_description
+from model.description import description_from_dict
+from model.loading import load_description
 from model.ik import IKSolution, NoClosedFormError, WorkspaceError, default_mask, ikine, ikine_a, pose_error
 from model.robot import Robot
 

@@ -251,7 +251,7 @@ def test_workspace_samples_are_seeded_and_within_limits(scara):
 
 
 def test_torque_limit_stated_in_the_robot_file_overrides_the_rule(tmp_path):
-    from model.description import load_description
+    from model.loading import load_description
     from model.robot import Robot
 
     text = (Path(load_description("scara").path)).read_text()

@@ -166,3 +166,41 @@ def test_no_module_cycle_in_the_control_layers():
     graph["closed_loop.schedule"] = graph["closed_loop.schedule"] | {"closed_loop.simulate"}
     assert _module_cycles(graph, ("control_design", "closed_loop")) == [["closed_loop.schedule",
                                                                            "closed_loop.simulate"]]
+
+
+def test_no_module_cycle_in_any_package():
+    """No two modules of the project import each other, directly or through others, even lazily."""
+    graph = import_graph()
+    assert _module_cycles(graph, PACKAGES) == []
+    # negative control: the loader importing back from the description is found as a cycle
+    graph["model.description"] = graph["model.description"] | {"model.loading"}
+    assert _module_cycles(graph, PACKAGES) == [["model.description", "model.loading", "model.urdf"]]
+
+
+LIBRARY = ("model", "control_design", "closed_loop", "fmu")
+
+
+def _front_end_uses(path: Path) -> list[str]:
+    """argparse / matplotlib.pyplot imports and ``matplotlib.use`` calls in the module at ``path``."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and not node.level:
+            names = [node.module or ""] + [f"{node.module}.{alias.name}" for alias in node.names]
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "use"
+              and isinstance(node.func.value, ast.Name) and node.func.value.id == "matplotlib"):
+            found.append(f"{path.relative_to(REPO)}: matplotlib.use")
+        found += [f"{path.relative_to(REPO)}: {n}" for n in names
+                  if n.split(".")[0] == "argparse" or n.startswith("matplotlib.pyplot")]
+    return found
+
+
+def test_library_packages_hold_no_command_line_or_pyplot():
+    """argparse and pyplot belong to the front end (workbench/); nothing calls matplotlib.use."""
+    bad = [hit for pkg in LIBRARY for path in sorted((REPO / pkg).rglob("*.py")) for hit in _front_end_uses(path)]
+    assert bad == []
+    assert [h for h in _front_end_uses(REPO / "workbench" / "animation.py") if "matplotlib.use" in h] == []
+    # negative control: the CLI itself does import argparse, and is found
+    assert _front_end_uses(REPO / "workbench" / "cli.py") == ["workbench/cli.py: argparse"]

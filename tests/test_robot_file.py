@@ -14,13 +14,8 @@ import numpy as np
 import pytest
 
 from model import Robot
-from model.description import (
-    SI_UNITS,
-    RobotDescriptionError,
-    description_from_dict,
-    identifier_from_name,
-    load_description,
-)
+from model.description import SI_UNITS, RobotDescriptionError, description_from_dict, identifier_from_name
+from model.loading import load_description
 from model.tasks import PICK_AND_PLACE, WaypointError, find_task, robot_tasks
 
 pytestmark = pytest.mark.filterwarnings("ignore::model.description.InertiaConsistencyWarning")

@@ -23,7 +23,7 @@ import roboticstoolbox as rtb
 from scipy.spatial.transform import Rotation
 from spatialmath import SE3
 
-from model.description import load_description
+from model.loading import load_description
 from model.tasks import (
     BUILTIN_TASKS,
     PICK_AND_PLACE,

@@ -21,7 +21,8 @@ import pinocchio as pin
 import pytest
 
 from model import Robot, load_robot
-from model.description import BUILTIN_DIR, RobotDescriptionError, load_description
+from model.description import BUILTIN_DIR, RobotDescriptionError
+from model.loading import load_description
 from model.urdf import description_from_urdf
 from urdf_cases import joint, link, write_urdf
 from references import pinocchio_model

@@ -16,7 +16,7 @@ import pinocchio as pin
 import pytest
 
 from model import BUILTIN_ROBOTS, InertiaConsistencyWarning, Robot
-from model.description import load_description
+from model.loading import load_description
 from model.urdf_export import export_urdf
 from references import friction_reference
 from urdf_references import pin_q
@@ -134,7 +134,7 @@ def test_pinocchio_reads_the_export_to_the_same_numbers(exported):
         close(robot.inertia(q), np.triu(M) + np.triu(M, 1).T, 1e-10)
 
 
-def test_cli_writes_atomically_and_refuses_a_missing_folder(tmp_path, capsys):
+def test_cli_writes_atomically_and_refuses_an_unwritable_folder(tmp_path, capsys):
     target = tmp_path / "arm.urdf"
     target.write_text("old content")
     assert main(["export-urdf", "planar2r", "-o", str(target)]) == 0
@@ -142,5 +142,9 @@ def test_cli_writes_atomically_and_refuses_a_missing_folder(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.urdf"]  # no temporary file left behind
     assert f"wrote {target}" in capsys.readouterr().out
     assert load_description(target).n == 2
-    assert main(["export-urdf", "planar2r", "-o", str(tmp_path / "missing" / "arm.urdf")]) == 2
-    assert "export-urdf: error: " in capsys.readouterr().err
+    # a missing folder is created, as for every output of the CLI; an unwritable one is refused before any work
+    assert main(["export-urdf", "planar2r", "-o", str(tmp_path / "missing" / "arm.urdf")]) == 0
+    assert load_description(tmp_path / "missing" / "arm.urdf").n == 2
+    capsys.readouterr()
+    assert main(["export-urdf", "planar2r", "-o", "/proc/manip-missing/arm.urdf"]) == 2
+    assert capsys.readouterr().err.startswith("manip export-urdf: error: --output: cannot create the directory '/proc/manip-missing'")

@@ -9,14 +9,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
-import matplotlib
+import numpy as np
+from matplotlib.animation import FuncAnimation, PillowWriter
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
-
-from model.robot import Robot  # noqa: E402
+from model.files import atomic_path
+from model.robot import Robot
 
 __all__ = ["plot_arm", "animate_arm"]
 
@@ -48,10 +47,17 @@ def _draw_base(ax, z_floor: float) -> None:
     ax.plot([0.0], [0.0], [0.0], "ks", ms=7)
 
 
-def plot_arm(robot: Robot, q: np.ndarray, ax=None) -> plt.Figure:
+def _figure(size: float) -> Figure:
+    """A Figure drawn by the Agg canvas: no pyplot state, no GUI backend."""
+    fig = Figure(figsize=(size, size))
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def plot_arm(robot: Robot, q: np.ndarray, ax=None) -> Figure:
     """Draw the arm at configuration ``q`` (rad / m) in 3-D; returns the figure."""
     frames = robot.fkine_all(q)
-    fig = ax.figure if ax is not None else plt.figure(figsize=(5, 5))
+    fig = ax.figure if ax is not None else _figure(5.0)
     ax = ax if ax is not None else fig.add_subplot(projection="3d")
     p = frames[:, 0:3, 3]
     centre, half = _limits(np.vstack([p, np.zeros((1, 3))]))
@@ -86,7 +92,7 @@ def animate_arm(
     tool = origins[:, -1, :]
     centre, half = _limits(np.vstack([origins.reshape(-1, 3), np.zeros((1, 3))]))
 
-    fig = plt.figure(figsize=(5.5, 5.5))
+    fig = _figure(5.5)
     ax = fig.add_subplot(projection="3d")
     _setup_axes(ax, centre, half, robot.name)
     _draw_base(ax, centre[2] - half)
@@ -107,6 +113,6 @@ def animate_arm(
     anim = FuncAnimation(fig, draw, frames=len(idx), blit=False)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(path, writer=PillowWriter(fps=fps))
-    plt.close(fig)
+    with atomic_path(path) as tmp:
+        anim.save(tmp, writer=PillowWriter(fps=fps))
     return path

@@ -20,15 +20,17 @@ import numpy as np
 
 import fmu
 from closed_loop import TrackingResult, closed_loop_through_fmu, simulate_tracking
-from closed_loop.commands import save_tracking_plots
 from control_design import design_robot, reference_task
-from control_design.commands import save_design_plots, write_json
 from control_design.design import RobotDesign
 from control_design.reference import reference_task_name
+from model.files import write_atomic
 from model.robot import load_robot
 
 from .animation import animate_arm
-from .cli import format_build, format_info
+from .cmd_design import save_design_plots
+from .cmd_track import save_tracking_plots
+from .formatting import format_build, format_info
+from .outputs import write_json
 from .report import Report
 
 __all__ = ["DemoResult", "run_demo", "Progress"]
@@ -158,7 +160,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     progress.step("validating the FMU (FMPy checks, CS and ME against the Python model, state, derivatives, libcosim)")
     validation = fmu.validate_fmu(fmu_path, progress=lambda msg: progress.note(msg))
     summary = validation.format()
-    (out / "fmu_validation.txt").write_text(summary + "\n")
+    write_atomic(out / "fmu_validation.txt", summary + "\n")
     files.append(out / "fmu_validation.txt")
     report.heading("FMU")
     report.text(f"`{fmu_path.name}`: FMI 2.0, Co-Simulation and Model Exchange in one file, C only at run time.")

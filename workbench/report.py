@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
+from model.files import write_atomic
+
 __all__ = ["Report", "format_number"]
 
 
@@ -118,6 +120,6 @@ class Report:
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         md, htm = folder / f"{stem}.md", folder / f"{stem}.html"
-        md.write_text(self.to_markdown())
-        htm.write_text(self.to_html())
+        write_atomic(md, self.to_markdown())
+        write_atomic(htm, self.to_html())
         return md, htm

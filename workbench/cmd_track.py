@@ -6,53 +6,52 @@ writes ``DIR/metrics.json`` and ``DIR/tracking_error.png``, ``DIR/torques.png``,
 ``DIR/joints.png``; progress goes to stderr. With a plant/model mismatch
 (``--payload``, ``--friction-scale``, ``--mass-scale``) the same controller also
 runs on the exact plant and ``metrics.json`` reports both and their ratio.
-
-Bad input raises a ``ValueError`` subclass; ``workbench.cli.main`` prints it as
-one line and exits with status 2.
+``--out`` is checked before the simulation starts.
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import matplotlib.pyplot as plt
+from .args import add_spec_args, controller_kind, finite_or_fail
+from .outputs import check_out_dir, out_dir, save_figure, write_json
 
-from control_design.commands import add_spec_args, controller_kind, finite_or_fail, out_dir, write_json
-from control_design.computed_torque import ModelMismatch, plant_with_mismatch
-from control_design.design import design_robot
-from control_design.errors import DesignSpecError
-from control_design.reference import check_trajectory_limits, task_trajectory
-from model.robot import load_robot
-
-from .plots import joint_plot, torque_plot, tracking_error_plot
-from .progress import ProgressLine
-from .result import TrackingResult
-from .simulate import simulate_tracking
+if TYPE_CHECKING:
+    from closed_loop.result import TrackingResult
 
 __all__ = ["register", "run_track", "save_tracking_plots"]
 
 
 def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "") -> list[Path]:
     """Write ``{prefix}tracking_error.png``, ``{prefix}torques.png`` and ``{prefix}joints.png``."""
+    from closed_loop.plots import joint_plot, torque_plot, tracking_error_plot
+
     paths = []
     for name, plot in (("tracking_error", tracking_error_plot), ("torques", torque_plot), ("joints", joint_plot)):
-        fig = plot(result)
-        paths.append(out / f"{prefix}{name}.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        paths.append(save_figure(plot(result), out / f"{prefix}{name}.png"))
     return paths
 
 
 def run_track(args: argparse.Namespace) -> int:
     """``manip track``: simulate the closed loop along a task, write metrics.json and plots."""
+    from closed_loop.progress import ProgressLine
+    from closed_loop.simulate import simulate_tracking
+    from control_design.computed_torque import ModelMismatch, plant_with_mismatch
+    from control_design.design import design_robot
+    from control_design.errors import DesignSpecError
+    from control_design.reference import check_trajectory_limits, task_trajectory
+    from model.robot import load_robot
+
     kind = controller_kind(args.controller)
     finite_or_fail(args.rate, "--rate")
     finite_or_fail(args.segment_time, "--segment-time")
     if args.payload is not None and not (math.isfinite(args.payload) and args.payload >= 0):
         raise DesignSpecError(f"--payload: expected a mass >= 0 kg, got {args.payload!r}")
+    check_out_dir(args.out)
     robot = load_robot(args.robot)
     traj = task_trajectory(robot, args.task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
@@ -94,9 +93,12 @@ def run_track(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers: Any) -> None:
-    """Add the ``track`` sub-command to ``manip``'s sub-parsers."""
+def register(subparsers: Any, full: bool = True) -> None:
+    """Add the ``track`` sub-command to ``manip``'s sub-parsers (``full=False``: its name and help only)."""
     p = subparsers.add_parser("track", help="simulate closed-loop tracking of a task on the nonlinear model")
+    p.set_defaults(func=run_track)
+    if not full:
+        return
     add_spec_args(p)
     src = p.add_mutually_exclusive_group()
     src.add_argument("--task", default="pick-and-place", help="built-in task (default pick-and-place)")

@@ -1,55 +1,38 @@
-"""``manip export-fmu`` and ``manip validate-fmu``: the FMU sub-commands of the CLI."""
+"""``manip export-fmu`` and ``manip validate-fmu``: the FMU sub-commands."""
 
 from __future__ import annotations
 
 import argparse
-import sys
+
+from .args import positive_float
+from .outputs import out_file
 
 __all__ = ["register"]
 
 
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive finite step in s, got {text!r}")
-    return value
-
-
 def _internal_step(text: str) -> float:
     """The export's ``--step``: positive, finite and not below the FMU's ``internal_step`` minimum."""
-    from .variables import MIN_STEP
+    from fmu.variables import MIN_STEP
 
-    value = _positive_float(text)
+    value = positive_float(text)
     if value < MIN_STEP:
         raise argparse.ArgumentTypeError(f"expected an internal step of at least {MIN_STEP:g} s, got {text!r}")
     return value
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from .build import FmuBuildError, export_fmu
+    from fmu.build import export_fmu
 
-    try:
-        path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, progress=print)
-    except FmuBuildError as exc:
-        print(f"manip export-fmu: error: {exc}", file=sys.stderr)
-        return 2
+    out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
+    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, progress=print)
     print(f"wrote {path}")
     return 0
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from .cosim import CosimError
-    from .validate import validate_fmu
+    from fmu.validate import validate_fmu
 
-    try:
-        report = validate_fmu(args.fmu, t_end=args.horizon, step=args.step, with_cosim=not args.no_cosim,
-                          progress=print)
-    except CosimError as exc:
-        print(f"manip validate-fmu: error: {exc}", file=sys.stderr)
-        return 2
+    report = validate_fmu(args.fmu, t_end=args.horizon, step=args.step, with_cosim=not args.no_cosim, progress=print)
     print(report.format())
     return 0 if report.ok else 1
 
@@ -68,9 +51,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("validate-fmu", help="validate an FMU: description, binary, FMPy (CS and ME), "
                                                    "state round trips, directional derivatives, libcosim")
     p.add_argument("fmu", metavar="FILE.fmu", help="an FMU written by export-fmu")
-    p.add_argument("--horizon", type=_positive_float, default=3.0, metavar="T",
+    p.add_argument("--horizon", type=positive_float, default=3.0, metavar="T",
                    help="simulated time, s (default 3: open loop drifts, keep it short)")
-    p.add_argument("--step", type=_positive_float, default=1e-3, metavar="H",
+    p.add_argument("--step", type=positive_float, default=1e-3, metavar="H",
                    help="communication step, s (default 0.001)")
     p.add_argument("--no-cosim", action="store_true", help="skip the libcosim run")
     p.set_defaults(func=_cmd_validate)

@@ -1,0 +1,64 @@
+"""What the algorithms need of a robot: narrow interfaces, so they take any arm, not the Robot facade.
+
+:class:`~model.robot.Robot` satisfies both protocols; the algorithms
+(:mod:`model.ik`, :mod:`model.singularity`, :mod:`model.plant`,
+:mod:`model.linearise`) are typed against them and never import the facade,
+so the facade can import them without a cycle.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .description import RobotDescription
+    from .dynamics import Dynamics, DynamicsParameters
+    from .kinematics import KinematicsFunctions
+
+__all__ = ["DynamicArm", "KinematicArm"]
+
+
+class KinematicArm(Protocol):
+    """A serial arm with numeric forward kinematics: what IK and singularity analysis use."""
+
+    @property
+    def description(self) -> RobotDescription: ...
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def n(self) -> int: ...
+
+    @property
+    def qlim(self) -> np.ndarray: ...
+
+    @property
+    def q_rest(self) -> np.ndarray: ...
+
+    def fkine(self, q: Any) -> np.ndarray:
+        """Pose of the end effector in the world frame, T_0E (4, 4), m."""
+
+    def jacob0(self, q: Any) -> np.ndarray:
+        """Geometric Jacobian J_0 (6, n) expressed in the world frame."""
+
+
+class DynamicArm(KinematicArm, Protocol):
+    """A :class:`KinematicArm` with symbolic kinematics, dynamics and gears: what the plant and linearise use."""
+
+    @property
+    def kinematics(self) -> KinematicsFunctions: ...
+
+    @property
+    def dynamics(self) -> Dynamics: ...
+
+    @property
+    def gear_ratio(self) -> np.ndarray: ...
+
+    @property
+    def parameters(self) -> DynamicsParameters: ...
+
+    def rne(self, q: Any, qd: Any, qdd: Any) -> np.ndarray:
+        """Joint torques of the rigid arm, tau (n,), N m or N (inverse dynamics, recursive Newton-Euler)."""

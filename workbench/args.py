@@ -1,0 +1,74 @@
+"""Command-line arguments shared by the sub-commands: the design specification and number checks.
+
+Bad values raise :class:`UsageError` (or the control-design error naming the
+flag); :func:`workbench.cli.main` prints them as one line, exit status 2.
+control_design (python-control, matplotlib) is imported inside the functions,
+so that commands that do not design start without it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from model.errors import InputError
+
+__all__ = ["UsageError", "add_spec_args", "controller_kind", "finite_or_fail", "positive_float"]
+
+class UsageError(InputError):
+    """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
+
+
+def controller_kind(value: str) -> str:
+    """``value`` if it names a controller kind, else :class:`~control_design.errors.UnknownControllerError`."""
+    from control_design.design import CONTROLLER_KINDS
+    from control_design.errors import UnknownControllerError
+
+    if value not in CONTROLLER_KINDS:
+        raise UnknownControllerError(f"--controller: expected one of {', '.join(CONTROLLER_KINDS)}, got {value!r}")
+    return value
+
+
+def finite_or_fail(value: float | None, flag: str, positive: bool = True) -> None:
+    """Refuse a NaN, an infinity or (with ``positive``) a value <= 0 given to ``flag``; None passes."""
+    from control_design.errors import DesignSpecError
+
+    if value is None:
+        return
+    if not math.isfinite(value) or (positive and value <= 0):
+        raise DesignSpecError(f"{flag}: expected a {'positive ' if positive else ''}finite number, got {value!r}")
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a positive finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive finite step in s, got {text!r}")
+    return value
+
+
+def add_spec_args(p: argparse.ArgumentParser) -> None:
+    """The robot and design-specification arguments of ``manip design`` and ``manip track``.
+
+    The defaults are control_design's own, so this imports it (python-control):
+    :func:`workbench.cli.build_parser` calls it only for the command being run or for help.
+    """
+    from control_design.decentralised import DEFAULT_BANDWIDTH
+    from control_design.design import CONTROLLER_KINDS, DEFAULT_RATE_HZ
+
+    kinds = "{" + ",".join(CONTROLLER_KINDS) + "}"
+    p.add_argument("robot", help="built-in robot name or TOML file")
+    p.add_argument("--controller", default="pd", metavar=kinds,
+                   help="pd, pd-g (PD + gravity compensation), pid, pd-ff (PD + decoupled feed-forward), "
+                        "ct (computed torque); default pd")
+    p.add_argument("--bandwidth", type=float, default=DEFAULT_BANDWIDTH, metavar="RAD_S",
+                   help=f"closed-loop bandwidth, rad/s (default {DEFAULT_BANDWIDTH:g})")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--damping", type=float, default=None, metavar="Z", help="damping ratio (default 0.7)")
+    g.add_argument("--phase-margin", type=float, default=None, metavar="DEG", help="phase margin instead of the damping, deg")
+    p.add_argument("--rate", type=float, default=DEFAULT_RATE_HZ, metavar="HZ",
+                   help=f"control rate, Hz (default {DEFAULT_RATE_HZ:g}; must be >= 10 x bandwidth in Hz)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
