@@ -29,7 +29,8 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-from model.description import RobotDescriptionError, description_from_dict, load_description
+from model.description import RobotDescriptionError, description_from_dict
+from model.loading import load_description
 from model.limits import (
     FMU_RATIO_FLOOR_BYTES,
     MAX_FILE_BYTES,
