@@ -181,7 +181,8 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
                             t_eval=t_eval[(t_eval >= t0) & (t_eval <= t1)], events=[indicator(i) for i in range(n)])
             if sol.status < 0:
                 raise RuntimeError(f"simulate_stick_slip: solve_ivp failed on [{t0}, {t1}]: {sol.message}")
-            for tk, xk in zip(sol.t, sol.y.T):
+            # no output sample before the next event: solve_ivp returns an empty list
+            for tk, xk in zip(sol.t, np.reshape(sol.y, (x.size, -1)).T):
                 if not ts or tk > ts[-1]:
                     record(float(tk), xk, tau, m)
             if sol.status == 0:
