@@ -44,9 +44,11 @@ from control_design.design import RobotDesign
 from control_design.errors import SimulationDivergedError
 from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
+from fmu.archive import check_fmu_archive
 from fmu.build import build_fmu, export_fmu
 from fmu.cosim import CosimError, add_slave, last_error
 from fmu.validate import RobotNotReloadableError, reload_fmu_robot
+from model.errors import InputError
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -98,9 +100,10 @@ class _Instance:
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
+        check_fmu_archive(path)  # a stranger's FMU: refused before anything is extracted
         self.md = read_model_description(str(path))
         if self.md.coSimulation is None:
-            raise ValueError(f"{name}: {path.name} has no Co-Simulation interface")
+            raise InputError(f"{name}: {path.name} has no Co-Simulation interface")
         unzip = extract(str(path), unzipdir=os.path.join(workdir, name))
         self.vr = {v.name: int(v.valueReference) for v in self.md.modelVariables}
         self.name = name
