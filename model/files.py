@@ -1,7 +1,7 @@
 """Atomic output files: every file the workbench writes appears complete or not at all.
 
 A writer produces its output under a temporary name in the destination's
-folder (``.NAME.XXXX.tmp.SUFFIX``) and renames it over the destination with
+folder (``.NAME.<random>.tmp.SUFFIX``) and renames it over the destination with
 :func:`os.replace`, which is atomic on one file system. An interrupted or
 failed write leaves the destination untouched and removes the temporary file.
 """
@@ -16,7 +16,7 @@ from typing import Iterator
 
 __all__ = ["TEMP_SUFFIX", "atomic_path", "write_atomic"]
 
-#: Mark in the names of the temporary files (``.NAME.XXXX.tmp.SUFFIX``): none is left behind after a write.
+#: Mark in the names of the temporary files (``.NAME.<random>.tmp.SUFFIX``): none is left behind after a write.
 TEMP_SUFFIX = ".tmp"
 
 
