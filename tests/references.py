@@ -193,3 +193,18 @@ def _rtb_urdf_robot(desc: RobotDescription):
                       tool=SE3(pose_matrix(desc.tip) @ desc.T_tool, check=False))
     robot.gravity = np.array(desc.gravity, dtype=float)
     return robot
+
+
+def random_payload_parameters(desc, rng):
+    """The description's parameter vector with a seeded random rigid payload (mass, com, a valid inertia)."""
+    from model.dynamics import parameter_layout
+
+    layout = parameter_layout(desc)
+    p = layout.defaults.copy()
+    s = layout.slices
+    p[s["payload_mass"]] = rng.uniform(0.5, 3.0)
+    p[s["payload_com"]] = rng.uniform(-0.1, 0.1, 3)
+    A = rng.standard_normal((3, 3))
+    I = 0.01 * (A @ A.T + np.eye(3))
+    p[s["payload_inertia"]] = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]]
+    return p

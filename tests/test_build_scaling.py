@@ -20,7 +20,8 @@ from chains import random_chain
 from model import InertiaConsistencyWarning, load_description
 from model.codegen import ABI_HEADER, CASADI_INT, CASADI_REAL, BuildEvent, build_library, find_compiler, generate_c
 from model.dynamics import MOTOR_MODELS, Dynamics, build_functions, parameter_layout
-from references import available_robots, friction_reference, pinocchio_model, symmetric_from_upper
+from references import (available_robots, friction_reference, pinocchio_model, random_payload_parameters,
+                        symmetric_from_upper)
 from workbench.cli import main
 
 # Newton-Euler and Lagrange C are two exact formulas evaluated in double precision through
@@ -33,19 +34,6 @@ def _desc(name):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
         return load_description(name)
-
-
-def _random_parameters(desc, rng):
-    """Defaults with a random payload: it enters B, so it must enter C."""
-    layout = parameter_layout(desc)
-    p = layout.defaults.copy()
-    s = layout.slices
-    p[s["payload_mass"]] = rng.uniform(0.5, 3.0)
-    p[s["payload_com"]] = rng.uniform(-0.1, 0.1, 3)
-    A = rng.standard_normal((3, 3))
-    I = 0.01 * (A @ A.T + np.eye(3))
-    p[s["payload_inertia"]] = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]]
-    return p
 
 
 def _close(actual, expected, rtol=RTOL):
@@ -69,7 +57,7 @@ def test_newton_euler_inertia_coriolis_gravload_equal_lagrange(functions):
     rng = np.random.default_rng(51)
     for _ in range(5):
         q, qd = rng.uniform(-2, 2, (2, desc.n))
-        p = _random_parameters(desc, rng)
+        p = random_payload_parameters(desc, rng)  # it enters B, so it must enter C
         _close(np.array(f.coriolis(q, qd, p)), np.array(lag.coriolis_lagrange(q, qd, p)))
         _close(np.array(f.inertia(q, p)), np.array(lag.inertia_lagrange(q, p)))
         _close(np.array(f.gravload(q, p)), np.array(lag.gravload_lagrange(q, p)))
@@ -81,7 +69,7 @@ def test_coriolis_times_qd_is_the_velocity_part_of_newton_euler(functions):
     rng = np.random.default_rng(52)
     for _ in range(5):
         q, qd = rng.uniform(-2, 2, (2, desc.n))
-        p = _random_parameters(desc, rng)
+        p = random_payload_parameters(desc, rng)
         bias = np.array(f.rne(q, qd, np.zeros(desc.n), p)).ravel() - np.array(f.gravload(q, p)).ravel()
         bias -= np.array(f.friction(qd, p)).ravel()
         _close(np.array(f.coriolis(q, qd, p)) @ qd, bias)
@@ -92,7 +80,7 @@ def test_lagrange_bdot_minus_2c_newton_euler_is_skew_symmetric(functions):
     desc, f = functions
     q, qd = ca.SX.sym("q", desc.n), ca.SX.sym("qd", desc.n)
     rng = np.random.default_rng(53)
-    p = _random_parameters(desc, rng)
+    p = random_payload_parameters(desc, rng)
     Bdot = ca.Function("Bdot", [q, qd], [ca.jtimes(f.lagrange.inertia_lagrange(q, p), q, qd)])
     for _ in range(5):
         qv, qdv = rng.uniform(-2, 2, (2, desc.n))

@@ -15,6 +15,7 @@ import pytest
 
 from model import InertiaConsistencyWarning, load_description
 from model.dynamics import MOTOR_MODELS, build_functions, parameter_layout
+from references import random_payload_parameters
 from references import available_robots
 
 RTOL = 1e-10
@@ -31,14 +32,9 @@ def model(request):
 
 
 def random_parameters(desc, rng):
-    layout = parameter_layout(desc)
-    p = layout.defaults.copy()
-    s = layout.slices
-    p[s["payload_mass"]] = rng.uniform(0.5, 3.0)
-    p[s["payload_com"]] = rng.uniform(-0.1, 0.1, 3)
-    A = rng.standard_normal((3, 3))
-    I = 0.01 * (A @ A.T + np.eye(3))
-    p[s["payload_inertia"]] = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]]
+    """A random payload (references.random_payload_parameters) and random friction."""
+    p = random_payload_parameters(desc, rng)
+    s = parameter_layout(desc).slices
     p[s["viscous_friction"]] = rng.uniform(0, 2e-3, desc.n)
     p[s["coulomb_friction_pos"]] = rng.uniform(0, 0.2, desc.n)
     p[s["coulomb_friction_neg"]] = -rng.uniform(0, 0.2, desc.n)
