@@ -153,19 +153,20 @@ def test_readme_documents_the_cache_folder():
     assert "MANIP_CACHE_DIR" in (REPO / "README.md").read_text()
 
 
-@pytest.mark.parametrize("argv", [["track", "scara"], ["demo", "--robot", "scara", "--no-gif"]])
+# track at 4 kHz simulates for about 3 s after its first progress line, so the interrupt lands mid-run
+@pytest.mark.parametrize("argv", [["track", "scara", "--rate", "4000"], ["demo", "--robot", "scara", "--no-gif"]])
 def test_ctrl_c_exits_130_and_leaves_no_partial_file(tmp_path, argv):
     out = tmp_path / "out"
     log_out, log_err = tmp_path / "stdout.txt", tmp_path / "stderr.txt"
     with open(log_out, "w") as fo, open(log_err, "w") as fe:
         proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", *argv, "--out", str(out)], cwd=REPO,
                                 stdout=fo, stderr=fe, text=True)
-        # wait until the command reports work (a progress line), then interrupt it about 2 s later
+        # wait until the command reports work (a progress line), then interrupt it shortly after
         deadline = time.monotonic() + 120
         while (log_out.stat().st_size + log_err.stat().st_size == 0 and time.monotonic() < deadline
                and proc.poll() is None):
             time.sleep(0.1)
-        time.sleep(2.0)
+        time.sleep(0.3)
         assert proc.poll() is None, log_err.read_text()  # still working when interrupted
         proc.send_signal(signal.SIGINT)
         proc.wait(timeout=120)
