@@ -80,6 +80,7 @@ __all__ = [
     "build_library",
     "build_jobs",
     "cache_dir",
+    "casadi_evaluate",
     "compile_flags",
     "compile_objects",
     "find_compiler",
@@ -437,6 +438,18 @@ class CompiledLibrary:
         if status != 0:
             raise RuntimeError(f"{name}: compiled evaluation failed with status {status}")
         return outputs
+
+
+def casadi_evaluate(f: ca.Function, inputs: Sequence[np.ndarray], n_points: int) -> np.ndarray:
+    """(n_points, numel) first output of ``f`` evaluated by CasADi: the layout of :meth:`CompiledLibrary.evaluate`.
+
+    The evaluation without a C compiler. ``inputs`` as there: ``(n_points, size)`` rows or
+    one ``(size,)`` vector shared by every point; matrices are column-major in each row.
+    """
+    cols = [a.T if a.ndim == 2 else a for a in inputs]
+    out = np.array(f.map(n_points)(*cols) if n_points > 1 else f(*cols))  # (rows, cols * n_points)
+    rows, cols_per_point = f.size1_out(0), f.size2_out(0)
+    return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
 
 
 class PointEvaluator:

@@ -23,6 +23,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .dynamics import Dynamics, DynamicsParameters, Workspace
     from .ik import IKResult, IKSolution
+    from .compiled_kinematics import CompiledKinematics
+    from .description import LinkDescription
     from .kinematics import KinematicsFunctions
     from .singularity import SingularityReport
 
@@ -96,28 +98,40 @@ class Robot:
 
     # -------------------------------------------------------------- kinematics
     @cached_property
-    def kinematics(self) -> KinematicsFunctions:
-        """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe``."""
-        from .kinematics import build_kinematics  # CasADi: imported when kinematics is first used
+    def compiled_kinematics(self) -> "CompiledKinematics":
+        """The numeric kinematics (compiled C, built or loaded from the cache on first use)."""
+        from .compiled_kinematics import CompiledKinematics  # CasADi: imported when kinematics is first used
 
-        return build_kinematics(self.description)
+        return CompiledKinematics(self.description)
+
+    @property
+    def kinematics(self) -> "KinematicsFunctions":
+        """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe`` (symbolic)."""
+        return self.compiled_kinematics.functions
 
     def fkine(self, q: Any) -> np.ndarray:
         """(4, 4) pose ``T_WE`` of the tool frame in the world frame (base and tool included); q in rad / m."""
-        return np.array(self.kinematics.fkine(self._q(q)))
+        return self.compiled_kinematics.fkine(q)
 
     def fkine_all(self, q: Any) -> np.ndarray:
         """(n+1, 4, 4) world poses of frame 0 (the base) and of every link frame (DH frame i for DH tables)."""
-        stacked = np.array(self.kinematics.fkine_all(self._q(q)))
-        return stacked.reshape(self.n + 1, 4, 4)
+        return self.compiled_kinematics.fkine_all(q)
 
     def jacob0(self, q: Any) -> np.ndarray:
         """(6, n) geometric Jacobian of the tool origin, rows [v; w], world-frame axes (m/s and rad/s per joint rate)."""
-        return np.array(self.kinematics.jacob0(self._q(q)))
+        return self.compiled_kinematics.jacob0(q)
 
     def jacobe(self, q: Any) -> np.ndarray:
         """(6, n) geometric Jacobian of the tool origin, rows [v; w], tool-frame axes."""
-        return np.array(self.kinematics.jacobe(self._q(q)))
+        return self.compiled_kinematics.jacobe(q)
+
+    def fkine_batch(self, Q: Any) -> np.ndarray:
+        """(N, 4, 4) tool poses ``T_WE`` at the N configurations of the (N, n) array ``Q``, one compiled call."""
+        return self.compiled_kinematics.fkine_batch(Q)
+
+    def jacob0_batch(self, Q: Any) -> np.ndarray:
+        """(N, 6, n) world-frame geometric Jacobians at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self.compiled_kinematics.jacob0_batch(Q)
 
     # ----------------------------------------------------------- singularities
     def manipulability(self, q: Any, axes: Sequence[bool] | str = "task") -> float:
@@ -219,6 +233,14 @@ class Robot:
         from .linearise import linearise
 
         return linearise(self, q0, qd0, u0, outputs)
+
+    def inertia_batch(self, Q: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
+        """(N, n, n) joint-space inertia B(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self.dynamics.inertia_batch(Q, self._parameters if p is None else p)
+
+    def gravload_batch(self, Q: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
+        """(N, n) gravity torque g(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self.dynamics.gravload_batch(Q, self._parameters if p is None else p)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays."""

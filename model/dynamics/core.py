@@ -15,11 +15,10 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Sequence
 
-import casadi as ca
 import numpy as np
 
-from ..arrays import finite_vector, shaped_vector
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, Progress, build_library
+from ..arrays import finite_vector, joint_batch, shaped_vector
+from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, Progress, build_library, casadi_evaluate
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
@@ -57,16 +56,6 @@ def _shaped(value: Any, size: int, name: str) -> np.ndarray:
 def _vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
     """A finite, contiguous vector of shape (size,) (see :func:`model.arrays.finite_vector`)."""
     return finite_vector(value, size, name, what)
-
-
-def _batch(value: Any, n: int, name: str) -> np.ndarray:
-    arr = np.ascontiguousarray(value, dtype=np.float64)
-    if arr.ndim != 2 or arr.shape[1] != n:
-        raise ValueError(f"{name}: expected an (N, {n}) array, got shape {np.shape(value)}")
-    if not np.all(np.isfinite(arr)):
-        rows = np.unique(np.nonzero(~np.isfinite(arr))[0])
-        raise ValueError(f"{name}: expected finite values; rows {rows[:5].tolist()} are not")
-    return arr
 
 
 class Dynamics:
@@ -188,11 +177,7 @@ class Dynamics:
         lib = self._backend()
         if lib is not None:
             return lib.evaluate(name, inputs, n_points)[0]
-        f: ca.Function = getattr(self.functions, name)
-        cols = [a.T if a.ndim == 2 else a for a in inputs]
-        out = np.array(f.map(n_points)(*cols) if n_points > 1 else f(*cols))  # (rows, cols * n_points)
-        rows, cols_per_point = f.size1_out(0), f.size2_out(0)
-        return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
+        return casadi_evaluate(getattr(self.functions, name), inputs, n_points)
 
     def _point(self, name: str, values: tuple[Any, ...], names: tuple[str, ...], p: DynamicsParameters | None,
                ws: Workspace | None) -> np.ndarray:
@@ -276,23 +261,35 @@ class Dynamics:
         """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)``."""
         return self._point("accel", (q, qd, tau), ("q", "qd", "tau"), p, ws)
 
-    def _batch3(self, name: str, A: Any, Bv: Any, Cv: Any, names: tuple[str, str, str],
-                p: DynamicsParameters | None) -> np.ndarray:
+    def _batch(self, name: str, values: tuple[Any, ...], names: tuple[str, ...],
+               p: DynamicsParameters | None, width: int | None = None) -> np.ndarray:
+        """(N, width) output of Function ``name`` (width: its size, default n) at the rows of the (N, n)
+        arrays ``values``, one call."""
         params = self.parameters if p is None else self.check_parameters(p)
         n = self.n
-        arrays = [_batch(v, n, k) for v, k in zip((A, Bv, Cv), names)]
+        width = n if width is None else width
+        arrays = [joint_batch(v, n, k) for v, k in zip(values, names)]
         N = arrays[0].shape[0]
         for arr, k in zip(arrays[1:], names[1:]):
             if arr.shape[0] != N:
                 raise ValueError(f"{k}: expected {N} rows like {names[0]}, got shape {arr.shape}")
         if N == 0:
-            return np.empty((0, n))
+            return np.empty((0, width))
         return self._eval(name, [*arrays, params.vector], N)
+
+    def inertia_batch(self, Q: Any, p: DynamicsParameters | None = None) -> np.ndarray:
+        """(N, n, n) joint-space inertia B(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        n = self.n
+        return self._batch("inertia", (Q,), ("Q",), p, n * n).reshape(-1, n, n).transpose(0, 2, 1)  # rows are column-major
+
+    def gravload_batch(self, Q: Any, p: DynamicsParameters | None = None) -> np.ndarray:
+        """(N, n) gravity torque g(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self._batch("gravload", (Q,), ("Q",), p)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: DynamicsParameters | None = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch3("rne", Q, QD, QDD, ("Q", "QD", "QDD"), p)
+        return self._batch("rne", (Q, QD, QDD), ("Q", "QD", "QDD"), p)
 
     def accel_batch(self, Q: Any, QD: Any, TAU: Any, p: DynamicsParameters | None = None) -> np.ndarray:
         """(N, n) forward dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch3("accel", Q, QD, TAU, ("Q", "QD", "TAU"), p)
+        return self._batch("accel", (Q, QD, TAU), ("Q", "QD", "TAU"), p)
