@@ -21,7 +21,7 @@ from .loading import load_description
 if TYPE_CHECKING:  # pragma: no cover
     import control
 
-    from .dynamics import Dynamics, DynamicsParameters, Workspace
+    from .dynamics import Dynamics, DynamicsParameters, Payload, Workspace
     from .ik import IKResult, IKSolution
     from .compiled_kinematics import CompiledKinematics
     from .description import LinkDescription
@@ -87,6 +87,12 @@ class Robot:
     def q_rest(self) -> np.ndarray:
         """(n,) rest configuration, rad or m."""
         return self.description.q_rest
+
+    @property
+    def links(self) -> "tuple[LinkDescription, ...]":
+        """The description's links, joint 1 first (frozen: geometry m and rad, mass kg, COM m and
+        inertia kg m^2 in link frame i, motor and friction data); read-only."""
+        return self.description.links
 
     @property
     def gear_ratio(self) -> np.ndarray:
@@ -189,6 +195,22 @@ class Robot:
         other.__dict__.update(self.__dict__)  # description, motor model, kinematics and the same Dynamics
         other._parameters = p
         return other
+
+    @property
+    def payload(self) -> "Payload":
+        """The payload of :attr:`parameters`: ``.mass`` kg, ``.com`` (3,) m and ``.inertia`` (3, 3) kg m^2
+        about the COM, both in frame n (the tip frame); mass 0 without one. Change it with :meth:`with_payload`."""
+        return self.parameters.payload
+
+    def with_payload(self, mass: float, com: Sequence[float] = (0.0, 0.0, 0.0),
+                     inertia: Sequence[float] = (0.0,) * 6) -> "Robot":
+        """A Robot carrying a rigid payload fixed to frame n (replacing any other), sharing this one's model.
+
+        The immutable counterpart of the Robotics Toolbox's ``robot.payload(m, p)``: ``mass`` kg,
+        ``com`` (3,) m in frame n, ``inertia`` (6,) ``[Ixx Iyy Izz Ixy Iyz Ixz]`` about the COM,
+        frame-n axes, kg m^2. Same as ``with_parameters(parameters.with_payload(...))``.
+        """
+        return self.with_parameters(self.parameters.with_payload(mass, com, inertia))
 
     def inertia(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included.
