@@ -4,7 +4,7 @@ The CasADi Functions of :mod:`model.kinematics` go through the one code-generati
 pipeline, :func:`model.codegen.build_library`, and its on-disk cache, as the
 dynamics do (:class:`model.dynamics.Dynamics`): built on first use or by
 :meth:`CompiledKinematics.compile`; without a C compiler the same Functions are
-evaluated by CasADi, with one :class:`~model.dynamics.NoCompilerWarning`.
+evaluated by CasADi, with one :class:`~model.codegen.NoCompilerWarning`.
 Single-point calls reuse preallocated buffers; the batch forms
 (:meth:`~CompiledKinematics.fkine_batch`, ...) evaluate N configurations in one
 C call. Frames and units as in :mod:`model.kinematics`: world frame W, tool frame
@@ -13,15 +13,13 @@ E, m and rad, Jacobian rows ``[v; w]``.
 
 from __future__ import annotations
 
-import threading
-import warnings
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from .arrays import as_joint_vector, joint_batch
-from .codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, PointEvaluator, Progress, build_library, casadi_evaluate
+from .codegen import BuildInfo, LazyLibrary, PointEvaluator, Progress, casadi_evaluate
 from .description import RobotDescription
 from .kinematics import KinematicsFunctions, build_kinematics
 
@@ -45,17 +43,18 @@ class CompiledKinematics:
     """
 
     def __init__(self, description: RobotDescription) -> None:
+        from .dynamics.core import source_fingerprint  # the model sources, as in the dynamics' key
+
         self.description = description
         self.n = description.n
-        self._library: CompiledLibrary | None = None
-        self._build_info: BuildInfo | None = None
-        self._fallback = False
-        self._lock = threading.Lock()
+        key = lambda: (f"kinematics|{description.digest()}|{','.join(COMPILED_KINEMATICS)}"  # noqa: E731
+                       f"|{source_fingerprint()}")
+        funcs = lambda: [getattr(self.functions, name) for name in COMPILED_KINEMATICS]  # noqa: E731
+        self._lazy = LazyLibrary(f"{description.identifier}-kinematics", key, funcs, "the kinematics")
         self._pool: list[dict[str, PointEvaluator]] = []  # idle buffer sets of the current library
 
     def __repr__(self) -> str:
-        state = "compiled" if self._library else ("casadi" if self._fallback else "not built")
-        return f"CompiledKinematics({self.description.name!r}, {state})"
+        return f"CompiledKinematics({self.description.name!r}, {self._lazy.state()})"
 
     @cached_property
     def functions(self) -> KinematicsFunctions:
@@ -65,7 +64,7 @@ class CompiledKinematics:
     @property
     def build_info(self) -> BuildInfo | None:
         """What the last :meth:`compile` did (None before it ran)."""
-        return self._build_info
+        return self._lazy.build_info
 
     def compile(self, *, force: bool = False, progress: Progress | None = None) -> BuildInfo:
         """Build (or load from the cache) the compiled library of :data:`COMPILED_KINEMATICS`.
@@ -73,35 +72,16 @@ class CompiledKinematics:
         ``force`` and ``progress`` as in :meth:`model.dynamics.Dynamics.compile`. Raises
         :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
         """
-        from .dynamics.core import source_fingerprint  # the model sources, as in the dynamics' key
-
-        with self._lock:
-            if self._library is not None and not force:
-                assert self._build_info is not None
-                return self._build_info
-            key = f"kinematics|{self.description.digest()}|{','.join(COMPILED_KINEMATICS)}|{source_fingerprint()}"
-            funcs = lambda: [getattr(self.functions, name) for name in COMPILED_KINEMATICS]  # noqa: E731
-            self._library, self._build_info = build_library(f"{self.description.identifier}-kinematics", key, funcs,
-                                                            force=force, progress=progress)
-            self._fallback = False
+        before = self._lazy.library
+        info = self._lazy.compile(force=force, progress=progress)
+        if self._lazy.library is not before:
             self._pool = []
-            return self._build_info
-
-    def _backend(self) -> CompiledLibrary | None:
-        if self._library is None and not self._fallback:
-            try:
-                self.compile()
-            except CompilerNotFoundError as exc:
-                from .dynamics.core import NoCompilerWarning
-
-                warnings.warn(f"{exc}; evaluating the kinematics with CasADi instead", NoCompilerWarning, stacklevel=4)
-                self._fallback = True
-        return self._library
+        return info
 
     def _point(self, name: str, q: Any) -> np.ndarray:
         """(numel,) output of Function ``name`` at one ``q`` (column-major), a fresh array."""
         qv = as_joint_vector(q, self.n)
-        lib = self._library if self._library is not None else self._backend()
+        lib = self._lazy.library or self._lazy.backend(stacklevel=3)
         if lib is None:
             return casadi_evaluate(getattr(self.functions, name), [qv], 1)[0]
         pool = self._pool  # a recompile replaces the list: buffers of the old library go back to the old one
@@ -125,7 +105,7 @@ class CompiledKinematics:
         N = arr.shape[0]
         if N == 0:
             return np.empty((0, 0)), 0
-        lib = self._backend()
+        lib = self._lazy.backend(stacklevel=3)
         if lib is None:
             return casadi_evaluate(getattr(self.functions, name), [arr], N), N
         return lib.evaluate(name, [arr], N)[0], N

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import threading
-import warnings
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Sequence
@@ -18,7 +16,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..arrays import finite_vector, joint_batch, shaped_vector
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, Progress, build_library, casadi_evaluate
+from ..codegen import (BuildInfo, CompiledLibrary, CompilerNotFoundError, LazyLibrary, NoCompilerWarning, Progress,
+                       casadi_evaluate)
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
@@ -39,10 +38,6 @@ def source_fingerprint() -> str:
         h.update(path.name.encode())
         h.update(path.read_bytes())
     return h.hexdigest()
-
-
-class NoCompilerWarning(RuntimeWarning):
-    """No C compiler: the numeric API evaluates with CasADi (correct, but much slower)."""
 
 
 _F64 = np.dtype(np.float64)
@@ -86,15 +81,15 @@ class Dynamics:
         self.n = description.n
         self.layout: ParameterLayout = parameter_layout(description)
         self._defaults = DynamicsParameters.defaults(self.layout)
-        self._library: CompiledLibrary | None = None
-        self._build_info: BuildInfo | None = None
-        self._fallback = False
-        self._lock = threading.Lock()
+        key = lambda: (f"{description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}"  # noqa: E731
+                       f"|{source_fingerprint()}")
+        funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
+        self._lazy = LazyLibrary(f"{description.identifier}-{self.motor_model}", key, funcs, "the dynamics")
         # Idle workspaces of the current library, borrowed for one call (list.pop / append are atomic).
         self._pool: list[Workspace] = []
 
     def __repr__(self) -> str:
-        state = "compiled" if self._library else ("casadi" if self._fallback else "not built")
+        state = self._lazy.state()
         return f"Dynamics({self.description.name!r}, motor_model={self.motor_model!r}, {state})"
 
     # ------------------------------------------------------------ parameters
@@ -135,7 +130,7 @@ class Dynamics:
     @property
     def build_info(self) -> BuildInfo | None:
         """What the last :meth:`compile` did (None before it ran)."""
-        return self._build_info
+        return self._lazy.build_info
 
     def compile(self, *, force: bool = False, progress: Progress | None = None) -> BuildInfo:
         """Build (or load from the cache) the compiled library of the numeric API.
@@ -150,27 +145,18 @@ class Dynamics:
 
         Raises :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
         """
-        with self._lock:
-            if self._library is not None and not force:
-                assert self._build_info is not None
-                return self._build_info
-            key = (f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}"
-                   f"|{source_fingerprint()}")
-            stem = f"{self.description.identifier}-{self.motor_model}"
-            funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
-            self._library, self._build_info = build_library(stem, key, funcs, force=force, progress=progress)
-            self._fallback = False
+        before = self._lazy.library
+        info = self._lazy.compile(force=force, progress=progress)
+        if self._lazy.library is not before:
             self._pool = []
-            return self._build_info
+        return info
+
+    @property
+    def _library(self) -> CompiledLibrary | None:
+        return self._lazy.library
 
     def _backend(self) -> CompiledLibrary | None:
-        if self._library is None and not self._fallback:
-            try:
-                self.compile()
-            except CompilerNotFoundError as exc:
-                warnings.warn(f"{exc}; evaluating the dynamics with CasADi instead", NoCompilerWarning, stacklevel=3)
-                self._fallback = True
-        return self._library
+        return self._lazy.backend(stacklevel=3)
 
     def _eval(self, name: str, inputs: Sequence[np.ndarray], n_points: int) -> np.ndarray:
         """(n_points, numel) first output of Function ``name``; rows are states, matrices column-major."""
