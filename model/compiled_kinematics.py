@@ -13,6 +13,7 @@ E, m and rad, Jacobian rows ``[v; w]``.
 
 from __future__ import annotations
 
+import math
 from functools import cached_property
 from typing import Any
 
@@ -27,6 +28,7 @@ __all__ = ["COMPILED_KINEMATICS", "CompiledKinematics"]
 
 #: The kinematic Functions compiled for the numeric API, one translation unit each.
 COMPILED_KINEMATICS: tuple[str, ...] = ("fkine", "fkine_all", "jacob0", "jacobe")
+_F64 = np.dtype(np.float64)
 
 
 class CompiledKinematics:
@@ -79,8 +81,15 @@ class CompiledKinematics:
         return info
 
     def _point(self, name: str, q: Any) -> np.ndarray:
-        """(numel,) output of Function ``name`` at one ``q`` (column-major), a fresh array."""
-        qv = as_joint_vector(q, self.n)
+        """(numel,) output of Function ``name`` at one ``q`` (column-major), a fresh array.
+
+        A float64 (n,) array whose sum is finite (so every entry is) skips the general check of
+        :func:`~model.arrays.as_joint_vector`, which every other input, and an overflowing sum, goes through.
+        """
+        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == (self.n,) and math.isfinite(sum(q.tolist())):
+            qv = q
+        else:
+            qv = as_joint_vector(q, self.n)
         lib = self._lazy.library or self._lazy.backend(stacklevel=3)
         if lib is None:
             return casadi_evaluate(getattr(self.functions, name), [qv], 1)[0]
