@@ -79,7 +79,9 @@ def test_batches_against_the_robotics_toolbox(robot):
     np.testing.assert_array_equal(ck.fkine_all_batch(Q), np.array([robot.fkine_all(q) for q in Q]))
 
 
-def test_dynamics_batches_equal_the_single_point_calls(robot):
+@pytest.mark.parametrize("name", ["scara", "puma560", "planar3r"])  # 3 robots: each compiles its dynamics
+def test_dynamics_batches_equal_the_single_point_calls(name):
+    robot = load_robot(name)
     Q = _configurations(robot, np.random.default_rng(3), 6)
     p = robot.parameters.with_payload(1.5, [0.01, 0.0, 0.05])
     B = robot.inertia_batch(Q, p)
