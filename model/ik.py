@@ -285,7 +285,9 @@ def ikine(
         components are (mask given); :attr:`IKResult.ignored` names the components a
         mask ignored and :attr:`IKResult.error` gives their miss. A search that solves
         the masked components but misses the ignored ones (a branch with another
-        orientation) is restarted while searches remain. Without success the reason
+        orientation) is restarted while searches remain, unless the structure fixes
+        those components (every joint axis along the world z axis: a SCARA's roll and
+        pitch, a planar arm's z), which proves the target unreachable at once. Without success the reason
         says why: the masked components converged but the target is outside what the
         structure can reach (with the misses), or the best residual, joints at a
         limit, likely out of reach.
@@ -342,6 +344,9 @@ def ikine(
                 return result(q, e, E, True, search + 1, _converged_reason(W, e, mask_given))
             if partial is None or full < float(np.linalg.norm(partial[1])):
                 partial = (q, e, E)
+            if _fixed_by_structure(robot.jacob0(q), W):
+                return result(*partial, False, search + 1,
+                              _unreachable_reason(robot, W, partial[1], tol, search + 1, proven=True))
     searches = max(1, slimit)
     if partial is not None:
         q, e, E = partial
@@ -375,15 +380,37 @@ def _converged_reason(W: np.ndarray, e: np.ndarray, mask_given: bool) -> str:
             f"ignored by the given mask: {', '.join(ignored)}, missed by {misses}")
 
 
-def _unreachable_reason(robot: "KinematicArm", W: np.ndarray, e: np.ndarray, tol: float, searches: int) -> str:
+#: A Jacobian entry at most this large counts as zero in :func:`_fixed_by_structure` (m or rad per
+#: joint unit): over joint ranges of a few rad or m it moves a component by ~1e-11, below ``tol``.
+_ZERO_ROW = 1e-12
+
+
+def _fixed_by_structure(J: np.ndarray, W: np.ndarray) -> bool:
+    """Whether no configuration changes the ignored components, so restarts cannot reach the full pose.
+
+    Shown from ``J = jacob0(q)`` at one q: rows w_x and w_y zero means every revolute axis is
+    along the world z axis here, hence everywhere (each axis is turned only by the joints before
+    it, all about z). The orientation is then ``Rz(phi) R_c``: a target reachable in orientation
+    gives rx = ry = 0 at *every* q, so a miss in rx or ry proves it unreachable; and row v_z zero
+    means z is constant. Any other ignored component (x, y, rz: a branch may change it) -> False.
+    """
+    if np.abs(J[3:5]).max() > _ZERO_ROW:
+        return False
+    ignored = np.flatnonzero(W == 0)
+    return all(k in (3, 4) or (k == 2 and np.abs(J[2]).max() <= _ZERO_ROW) for k in ignored)
+
+
+def _unreachable_reason(robot: "KinematicArm", W: np.ndarray, e: np.ndarray, tol: float, searches: int,
+                        proven: bool = False) -> str:
     ignored = _names(W, solved=False)
     form = closed_form_for(robot.description)
     structure = f"the {form.kind} structure of {robot.name!r}" if form is not None else repr(robot.name)
+    why = ("no configuration changes them: every joint axis is along the world z axis"
+           if proven else f"best of {searches} searches")
     return (f"the target pose is outside what {structure} can reach: the search solved "
             f"{', '.join(_names(W, True))} (residual < {tol:g}), but the components it cannot control, "
             f"{', '.join(ignored)}, are missed by {_component_list(ignored, np.abs(e[W == 0]))} "
-            f"(best of {searches} searches); pass mask={W.tolist()} to accept a solution of the "
-            f"controlled components only")
+            f"({why}); pass mask={W.tolist()} to accept a solution of the controlled components only")
 
 
 def _failure_reason(robot: "KinematicArm", q: np.ndarray, W: np.ndarray, e: np.ndarray, E: float,

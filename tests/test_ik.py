@@ -611,6 +611,7 @@ def test_ikine_tilted_scara_target_is_not_a_success(robots: dict[str, Robot]) ->
     T = _tilted_about_world_x(scara.fkine([0.3, 0.5, 1.0, 0.2]), 0.3)
     res = ikine(scara, T, slimit=4)
     assert not res.success and not res.mask_given
+    assert res.searches == 1  # every SCARA axis is vertical: no restart can tilt the tool
     assert res.solved == ("x", "y", "z", "rz") and res.ignored == ("rx", "ry")
     # the masked search converged: the old rule (masked residual < tol) called this a success
     assert res.residual < 1e-10
@@ -621,7 +622,8 @@ def test_ikine_tilted_scara_target_is_not_a_success(robots: dict[str, Robot]) ->
     assert abs(math.acos(np.clip(z_reached @ z_target, -1, 1)) - 0.3) < 1e-9
     assert abs(res.rotation_error - 0.3) < 1e-9
     assert re.search(r"outside what the scara structure of 'scara' can reach: the search solved x, y, z, rz.*"
-                     r"rx, ry, are missed by rx 0\.3 rad, ry .* rad .*pass mask=\[1\.0, 1\.0, 1\.0, 0\.0, 0\.0, 1\.0\]",
+                     r"rx, ry, are missed by rx 0\.3 rad, ry .* rad \(no configuration changes them: every joint "
+                     r"axis is along the world z axis\); pass mask=\[1\.0, 1\.0, 1\.0, 0\.0, 0\.0, 1\.0\]",
                      res.reason)
     assert res.summary().startswith("ikine failed: the target pose is outside")
 
@@ -677,3 +679,14 @@ def test_ikine_restarts_past_a_branch_with_the_wrong_orientation(robots: dict[st
     assert np.abs(res.q - [0.4, 0.7, 0.6]).max() < 1e-6
     given = ikine(arm, T, q0=other, mask=[1, 1, 1, 0, 0, 0])  # a given mask accepts the first branch, and says so
     assert given.success and given.searches == 1 and given.rotation_error > 0.1 and "ignored by the given mask" in given.reason
+
+
+def test_ikine_restarts_when_a_branch_can_change_an_ignored_component(robots: dict[str, Robot]) -> None:
+    """Planar 2R, default mask x, y: the tool heading rz is ignored but differs between the elbow
+    branches, so it is not fixed by the structure; from the wrong branch the search restarts."""
+    arm = robots["planar2r"]
+    T = arm.fkine([0.4, 0.7])
+    other = next(s.q for s in ikine_a(arm, T) if abs(s.q[1] + 0.7) < 1e-9)
+    assert abs(pose_error(arm.fkine(other), T)[5]) > 0.1
+    res = ikine(arm, T, q0=other)
+    assert res.success and res.searches > 1 and np.abs(res.error).max() < 1e-9
