@@ -116,6 +116,39 @@ def compare_peers(name: str, N: int, rtb_states: int) -> None:
         f" accel x{t_pin_aba / t_acc:.1f} vs pinocchio")
 
 
+def compare_inertia_gravload(name: str, N: int, peer_states: int) -> None:
+    """``inertia_batch`` and ``gravload_batch`` against RTB's batched ``inertia(Q)``/``gravload(Q)`` and Pinocchio loops."""
+    import pinocchio as pin
+
+    from tests.references import pinocchio_model, rtb_robot, symmetric_from_upper
+
+    robot = _load(name)
+    n = robot.n
+    rng = np.random.default_rng(2025)
+    Q = rng.uniform(-2.0, 2.0, (N, n))
+    M = min(N, peer_states)
+    say(f"\n== {name}: inertia_batch / gravload_batch, ns per state (ours on N = {N}, peers on {M}) ==")
+    t_B = time_best(lambda: robot.inertia_batch(Q))
+    t_g = time_best(lambda: robot.gravload_batch(Q))
+    B, g = robot.inertia_batch(Q[:M]), robot.gravload_batch(Q[:M])
+    rtb = rtb_robot(robot.description)
+    t_rtb_B = time_best(lambda: rtb.inertia(Q[:M]), repeat=1)
+    t_rtb_g = time_best(lambda: rtb.gravload(Q[:M]), repeat=1)
+    err_rtb = max(np.abs(rtb.inertia(Q[:M]) - B).max(), np.abs(rtb.gravload(Q[:M]) - g).max())
+    model = pinocchio_model(robot.description)
+    data = model.createData()
+    t_pin_B = time_best(lambda: [pin.crba(model, data, qk).copy() for qk in Q[:M]], repeat=1)
+    t_pin_g = time_best(lambda: [pin.computeGeneralizedGravity(model, data, qk).copy() for qk in Q[:M]], repeat=1)
+    err_pin = max(max(np.abs(symmetric_from_upper(pin.crba(model, data, qk)) - Bk).max() for qk, Bk in zip(Q[:M], B)),
+                  max(np.abs(pin.computeGeneralizedGravity(model, data, qk) - gk).max() for qk, gk in zip(Q[:M], g)))
+    per = lambda t, count: t / count * 1e9  # noqa: E731
+    say(f"inertia  ours {per(t_B, N):8.1f}   rtb inertia(Q) {per(t_rtb_B, M):9.1f} (x{per(t_rtb_B, M) / per(t_B, N):.0f})"
+        f"   pinocchio crba loop {per(t_pin_B, M):8.1f} (x{per(t_pin_B, M) / per(t_B, N):.1f})")
+    say(f"gravload ours {per(t_g, N):8.1f}   rtb gravload(Q) {per(t_rtb_g, M):8.1f} (x{per(t_rtb_g, M) / per(t_g, N):.0f})"
+        f"   pinocchio gravity loop {per(t_pin_g, M):5.1f} (x{per(t_pin_g, M) / per(t_g, N):.1f})")
+    say(f"max abs diff vs ours: rtb {err_rtb:.1e}, pinocchio {err_pin:.1e}")
+
+
 def joints_table(N: int) -> None:
     """ns/state of Lagrange- and Newton-Euler-generated rne and accel versus the number of joints."""
     candidates = [("planar2r", 2), ("planar3r", 3), ("scara", 4), ("puma560", 6)]
@@ -157,6 +190,7 @@ def main(argv: list[str] | None = None) -> None:
         build_times(["scara", "puma560"])
     for name in ("scara", "puma560"):
         compare_peers(name, args.N, args.rtb_states)
+        compare_inertia_gravload(name, args.N, min(args.rtb_states, 5_000))
     if not args.no_table:
         joints_table(args.N)
 

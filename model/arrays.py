@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["as_joint_vector", "shaped_vector", "finite_vector"]
+__all__ = ["as_joint_vector", "shaped_vector", "finite_vector", "joint_batch"]
 
 
 def shaped_vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
@@ -35,3 +35,14 @@ def finite_vector(value: Any, size: int, name: str, what: str = "values") -> np.
 def as_joint_vector(value: Any, n: int, name: str = "q") -> np.ndarray:
     """``value`` as a finite float array of shape (n,); (n, 1) and (1, n) are accepted; a ValueError naming ``name`` otherwise."""
     return finite_vector(value, n, name, "joint values")
+
+
+def joint_batch(value: Any, n: int, name: str = "Q") -> np.ndarray:
+    """``value`` as a finite, C-contiguous float64 array of shape (N, n); a ValueError naming ``name`` and the bad rows otherwise."""
+    arr = np.ascontiguousarray(value, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != n:
+        raise ValueError(f"{name}: expected an (N, {n}) array, got shape {np.shape(value)}")
+    if not np.all(np.isfinite(arr)):
+        rows = np.unique(np.nonzero(~np.isfinite(arr))[0])
+        raise ValueError(f"{name}: expected finite values; rows {rows[:5].tolist()} are not")
+    return arr

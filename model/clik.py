@@ -68,6 +68,9 @@ class CLIKResult:
         (N+1,) ``|p_d - p|`` over the masked components, m.
     inversion
         The inversion used.
+    mask
+        (3,) booleans: the position components [x y z] the loop controlled; the others are
+        named in :attr:`ignored`, and their miss is in :attr:`error` (``p_d - p``, all three).
     """
 
     t: np.ndarray
@@ -77,6 +80,28 @@ class CLIKResult:
     p_d: np.ndarray
     error_norm: np.ndarray
     inversion: str
+    mask: np.ndarray
+
+    @property
+    def solved(self) -> tuple[str, ...]:
+        """Names of the controlled components, e.g. ``("x", "y", "z")``."""
+        return tuple(k for k, m in zip("xyz", self.mask) if m)
+
+    @property
+    def ignored(self) -> tuple[str, ...]:
+        """Names of the position components the mask left uncontrolled."""
+        return tuple(k for k, m in zip("xyz", self.mask) if not m)
+
+    @property
+    def error(self) -> np.ndarray:
+        """(N+1, 3) position error ``p_d - p`` on all three axes, world frame, m (ignored axes included)."""
+        return self.p_d - self.p
+
+    @property
+    def ignored_error_max(self) -> dict[str, float]:
+        """Largest |error| over the run of each ignored component, m."""
+        err = np.abs(self.error).max(axis=0)
+        return {k: float(e) for k, e, m in zip("xyz", err, self.mask) if not m}
 
     @property
     def qd_max(self) -> np.ndarray:
@@ -194,7 +219,8 @@ def clik(
             qd = J.T @ np.linalg.solve(J @ J.T + damping * eye, v)
         Q[k], QD[k], P[k], PD[k], E[k] = q, qd, p, p_d, np.linalg.norm(e)
         q = q + dt * qd
-    return CLIKResult(t=t, q=Q, qd=QD, p=P, p_d=PD, error_norm=E, inversion=inversion)
+    return CLIKResult(t=t, q=Q, qd=QD, p=P, p_d=PD, error_norm=E, inversion=inversion,
+                      mask=sel.copy())
 
 
 def seed_clik_task(

@@ -46,6 +46,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -74,12 +75,15 @@ __all__ = [
     "FunctionSignature",
     "GENERATED_CFLAGS",
     "GENERATOR_VERSION",
+    "LazyLibrary",
+    "NoCompilerWarning",
     "PointEvaluator",
     "Progress",
     "UnitInfo",
     "build_library",
     "build_jobs",
     "cache_dir",
+    "casadi_evaluate",
     "compile_flags",
     "compile_objects",
     "find_compiler",
@@ -439,6 +443,18 @@ class CompiledLibrary:
         return outputs
 
 
+def casadi_evaluate(f: ca.Function, inputs: Sequence[np.ndarray], n_points: int) -> np.ndarray:
+    """(n_points, numel) first output of ``f`` evaluated by CasADi: the layout of :meth:`CompiledLibrary.evaluate`.
+
+    The evaluation without a C compiler. ``inputs`` as there: ``(n_points, size)`` rows or
+    one ``(size,)`` vector shared by every point; matrices are column-major in each row.
+    """
+    cols = [a.T if a.ndim == 2 else a for a in inputs]
+    out = np.array(f.map(n_points)(*cols) if n_points > 1 else f(*cols))  # (rows, cols * n_points)
+    rows, cols_per_point = f.size1_out(0), f.size2_out(0)
+    return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
+
+
 class PointEvaluator:
     """One Function of a :class:`CompiledLibrary` evaluated at a single point, everything allocated once.
 
@@ -715,3 +731,60 @@ def build_library(
     return library, BuildInfo(
         key, lib_path, False, t_gen - t_sym, t_cc - t_gen, t_done - t_cc, total, compiler, GENERATED_CFLAGS, unit_info,
     )
+
+
+class NoCompilerWarning(RuntimeWarning):
+    """No C compiler: the numeric API evaluates with CasADi (correct, but much slower)."""
+
+
+class LazyLibrary:
+    """A library of :func:`build_library` made on first use, or CasADi evaluation without a C compiler.
+
+    The owner (the dynamics or kinematics of one robot) keeps one and evaluates through
+    :meth:`backend`: the compiled library, or None after one :class:`NoCompilerWarning`
+    saying that ``what`` is evaluated by CasADi instead. Thread-safe.
+
+    Parameters
+    ----------
+    stem, make_functions
+        As in :func:`build_library`.
+    key_material
+        Called at each :meth:`compile`: the key material of :func:`build_library`.
+    what
+        What is compiled, in words, for the warning (e.g. ``"the dynamics"``).
+    """
+
+    def __init__(self, stem: str, key_material: Callable[[], str],
+                 make_functions: Callable[[], Sequence[ca.Function]], what: str) -> None:
+        self.stem, self.what = stem, what
+        self._key_material, self._make_functions = key_material, make_functions
+        self.library: CompiledLibrary | None = None
+        self.build_info: BuildInfo | None = None
+        self.fallback = False
+        self._lock = threading.Lock()
+
+    def compile(self, *, force: bool = False, progress: Progress | None = None) -> BuildInfo:
+        """Build (or load from the cache) the library; with ``force`` again even if it is loaded."""
+        with self._lock:
+            if self.library is not None and not force:
+                assert self.build_info is not None
+                return self.build_info
+            self.library, self.build_info = build_library(self.stem, self._key_material(), self._make_functions,
+                                                          force=force, progress=progress)
+            self.fallback = False
+            return self.build_info
+
+    def backend(self, stacklevel: int = 2) -> CompiledLibrary | None:
+        """The compiled library (compiled now if needed), or None without a C compiler (warned once)."""
+        if self.library is None and not self.fallback:
+            try:
+                self.compile()
+            except CompilerNotFoundError as exc:
+                warnings.warn(f"{exc}; evaluating {self.what} with CasADi instead", NoCompilerWarning,
+                              stacklevel=stacklevel + 1)
+                self.fallback = True
+        return self.library
+
+    def state(self) -> str:
+        """``"compiled"``, ``"casadi"`` (no compiler) or ``"not built"``, for a repr."""
+        return "compiled" if self.library else ("casadi" if self.fallback else "not built")

@@ -34,6 +34,7 @@ __all__ = [
     "ikine",
     "pose_error",
     "default_mask",
+    "POSE_COMPONENTS",
 ]
 
 _REPRODUCE_TOL = 1e-6
@@ -112,6 +113,17 @@ def ikine_a(robot: "KinematicArm", T: np.ndarray) -> list[IKSolution]:
 # --------------------------------------------------------------------------- numeric
 
 
+#: Names of the six pose-error components, in the order of :func:`pose_error` and of ``mask``:
+#: position error along the world x, y, z axes (m), then the rotation-vector components about
+#: them (rad; for small errors the roll, pitch and yaw errors).
+POSE_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
+
+
+def _component_list(names: Sequence[str], values: np.ndarray) -> str:
+    units = {"x": "m", "y": "m", "z": "m"}
+    return ", ".join(f"{k} {v:.3g} {units.get(k, 'rad')}" for k, v in zip(names, values))
+
+
 @dataclass(frozen=True, eq=False)
 class IKResult:
     """Outcome of the numeric :func:`ikine`.
@@ -121,7 +133,11 @@ class IKResult:
     q
         (n,) best joint values found, rad or m.
     success
-        Whether the weighted residual fell below ``tol``.
+        With the default mask (``mask_given`` False): whether the *full* pose is reached,
+        ``|error| < tol`` over all six components, so a target the structure cannot reach
+        (a tilted SCARA pose) is not a success. With a mask given: whether the weighted
+        residual over the masked components fell below ``tol``; the other components are
+        named in :attr:`ignored` and their miss is in :attr:`error`.
     iterations
         Levenberg-Marquardt iterations, summed over all searches.
     searches
@@ -129,7 +145,15 @@ class IKResult:
     residual
         ``sqrt(e^T W e)`` at ``q``: the masked pose error (m and rad mixed).
     reason
-        ``"converged"`` or why not, in words.
+        ``"converged"`` when every component is solved and reached; otherwise what was
+        solved, what was ignored and by how much it is missed, or why the search failed.
+    mask
+        (6,) weights used on :data:`POSE_COMPONENTS`.
+    mask_given
+        Whether the caller passed ``mask`` (False: the structure's default, :func:`default_mask`).
+    error
+        (6,) full pose error :func:`pose_error` at ``q`` on :data:`POSE_COMPONENTS`, m and rad,
+        ignored components included.
     """
 
     q: np.ndarray
@@ -138,6 +162,38 @@ class IKResult:
     searches: int
     residual: float
     reason: str
+    mask: np.ndarray
+    mask_given: bool
+    error: np.ndarray
+
+    @property
+    def solved(self) -> tuple[str, ...]:
+        """Names of the components the search solved for (weight > 0), e.g. ``("x", "y", "z", "rz")``."""
+        return tuple(k for k, w in zip(POSE_COMPONENTS, self.mask) if w > 0)
+
+    @property
+    def ignored(self) -> tuple[str, ...]:
+        """Names of the components the mask ignored (weight 0), e.g. ``("rx", "ry")`` for a SCARA."""
+        return tuple(k for k, w in zip(POSE_COMPONENTS, self.mask) if w == 0)
+
+    @property
+    def ignored_error(self) -> dict[str, float]:
+        """Signed error of each ignored component at ``q``: m (x, y, z) or rad (rx, ry, rz)."""
+        return {k: float(e) for k, e, w in zip(POSE_COMPONENTS, self.error, self.mask) if w == 0}
+
+    @property
+    def position_error(self) -> float:
+        """``|p_d - p|`` over all three axes, m (ignored axes included)."""
+        return float(np.linalg.norm(self.error[:3]))
+
+    @property
+    def rotation_error(self) -> float:
+        """Angle of the rotation from the reached to the target orientation, rad (ignored axes included)."""
+        return float(np.linalg.norm(self.error[3:]))
+
+    def summary(self) -> str:
+        """One line for a person: success or not, then :attr:`reason`."""
+        return f"ikine {'succeeded' if self.success else 'failed'}: {self.reason}"
 
 
 def _aligned(desc) -> bool:
@@ -204,14 +260,17 @@ def ikine(
     q0
         (n,) first initial guess, rad or m; default the robot's rest configuration.
     mask
-        6 weights >= 0 on the error [x y z rx ry rz]; default :func:`default_mask`.
+        6 weights >= 0 on the error components :data:`POSE_COMPONENTS` (x y z rx ry rz);
+        components of weight 0 are ignored by the search. Default :func:`default_mask`
+        (the components the structure controls, e.g. x, y, z, rz for a SCARA).
     ilimit
         Iterations per search.
     slimit
         Searches: the first from ``q0``, the others from seeded uniform random
         configurations within ``qlim`` (+-pi rad or +-1 m where a joint has none).
     tol
-        Success when ``sqrt(e^T W e) < tol`` (m and rad).
+        Tolerance, m and rad: on ``sqrt(e^T W e)`` for the search, and with the default
+        mask also on ``|e|`` over all six components for success.
     damping
         Initial Levenberg-Marquardt damping lambda (units of J^T W J).
     joint_limits
@@ -222,11 +281,20 @@ def ikine(
     Returns
     -------
     IKResult
-        With ``success=False`` and the reason (best residual, joints at a limit,
-        likely out of reach) when no search converged.
+        ``success`` means the full pose is reached (default mask) or the masked
+        components are (mask given); :attr:`IKResult.ignored` names the components a
+        mask ignored and :attr:`IKResult.error` gives their miss. A search that solves
+        the masked components but misses the ignored ones (a branch with another
+        orientation) is restarted while searches remain, unless the structure fixes
+        those components (every joint axis along the world z axis: a SCARA's roll and
+        pitch, a planar arm's z), which proves the target unreachable at once. Without success the reason
+        says why: the masked components converged but the target is outside what the
+        structure can reach (with the misses), or the best residual, joints at a
+        limit, likely out of reach.
     """
     T = _check_pose(T)
     n = robot.n
+    mask_given = mask is not None
     W = _check_mask(default_mask(robot) if mask is None else mask)
     q_start = robot.q_rest if q0 is None else np.asarray(q0, dtype=float).reshape(n)
     qlim = robot.qlim
@@ -241,7 +309,13 @@ def ikine(
         e = pose_error(robot.fkine(q), T)
         return e, float(e @ (W * e))
 
+    def result(q: np.ndarray, e: np.ndarray, E: float, success: bool, searches: int, reason: str) -> IKResult:
+        return IKResult(q=q, success=success, iterations=iterations, searches=searches, residual=math.sqrt(E),
+                        reason=reason, mask=W.copy(), mask_given=mask_given, error=e)
+
     best_q, best_E = project(q_start), math.inf
+    # With the default mask, the masked solution closest to the full pose (its q, e, E).
+    partial: tuple[np.ndarray, np.ndarray, float] | None = None
     iterations = 0
     for search in range(max(1, slimit)):
         q = project(q_start if search == 0 else rng.uniform(lo, hi))
@@ -264,10 +338,22 @@ def ikine(
         if E < best_E:
             best_q, best_E = q, E
         if math.sqrt(E) < tol:
-            return IKResult(q=_tidy(robot, q, joint_limits), success=True, iterations=iterations,
-                            searches=search + 1, residual=math.sqrt(E), reason="converged")
-    return IKResult(q=best_q, success=False, iterations=iterations, searches=max(1, slimit),
-                    residual=math.sqrt(best_E), reason=_failure_reason(robot, T, best_q, W, best_E, tol, slimit, ilimit))
+            q = _tidy(robot, q, joint_limits)
+            full = float(np.linalg.norm(e))
+            if mask_given or full < tol:
+                return result(q, e, E, True, search + 1, _converged_reason(W, e, mask_given))
+            if partial is None or full < float(np.linalg.norm(partial[1])):
+                partial = (q, e, E)
+            if _fixed_by_structure(robot.jacob0(q), W):
+                return result(*partial, False, search + 1,
+                              _unreachable_reason(robot, W, partial[1], tol, search + 1, proven=True))
+    searches = max(1, slimit)
+    if partial is not None:
+        q, e, E = partial
+        return result(q, e, E, False, searches, _unreachable_reason(robot, W, e, tol, searches))
+    e, _ = weighted(best_q)
+    return result(best_q, e, best_E, False, searches,
+                  _failure_reason(robot, best_q, W, e, best_E, tol, slimit, ilimit))
 
 
 def _tidy(robot: "KinematicArm", q: np.ndarray, joint_limits: bool) -> np.ndarray:
@@ -279,14 +365,64 @@ def _tidy(robot: "KinematicArm", q: np.ndarray, joint_limits: bool) -> np.ndarra
     return q
 
 
-def _failure_reason(robot: "KinematicArm", T: np.ndarray, q: np.ndarray, W: np.ndarray, E: float,
+def _names(W: np.ndarray, solved: bool) -> list[str]:
+    return [k for k, w in zip(POSE_COMPONENTS, W) if (w > 0) == solved]
+
+
+def _converged_reason(W: np.ndarray, e: np.ndarray, mask_given: bool) -> str:
+    ignored = _names(W, solved=False)
+    if not ignored:
+        return "converged"
+    misses = _component_list(ignored, np.abs(e[W == 0]))
+    if not mask_given:  # the full pose is reached: the ignored components agree within tol
+        return f"converged on {', '.join(_names(W, True))}; the default mask ignored {', '.join(ignored)} ({misses})"
+    return (f"converged on the masked components {', '.join(_names(W, True))}; "
+            f"ignored by the given mask: {', '.join(ignored)}, missed by {misses}")
+
+
+#: A Jacobian entry at most this large counts as zero in :func:`_fixed_by_structure` (m or rad per
+#: joint unit): over joint ranges of a few rad or m it moves a component by ~1e-11, below ``tol``.
+_ZERO_ROW = 1e-12
+
+
+def _fixed_by_structure(J: np.ndarray, W: np.ndarray) -> bool:
+    """Whether no configuration changes the ignored components, so restarts cannot reach the full pose.
+
+    Shown from ``J = jacob0(q)`` at one q: rows w_x and w_y zero means every revolute axis is
+    along the world z axis here, hence everywhere (each axis is turned only by the joints before
+    it, all about z). The orientation is then ``Rz(phi) R_c``: a target reachable in orientation
+    gives rx = ry = 0 at *every* q, so a miss in rx or ry proves it unreachable; and row v_z zero
+    means z is constant. Any other ignored component (x, y, rz: a branch may change it) -> False.
+    """
+    if np.abs(J[3:5]).max() > _ZERO_ROW:
+        return False
+    ignored = np.flatnonzero(W == 0)
+    return all(k in (3, 4) or (k == 2 and np.abs(J[2]).max() <= _ZERO_ROW) for k in ignored)
+
+
+def _unreachable_reason(robot: "KinematicArm", W: np.ndarray, e: np.ndarray, tol: float, searches: int,
+                        proven: bool = False) -> str:
+    ignored = _names(W, solved=False)
+    form = closed_form_for(robot.description)
+    structure = f"the {form.kind} structure of {robot.name!r}" if form is not None else repr(robot.name)
+    why = ("no configuration changes them: every joint axis is along the world z axis"
+           if proven else f"best of {searches} searches")
+    return (f"the target pose is outside what {structure} can reach: the search solved "
+            f"{', '.join(_names(W, True))} (residual < {tol:g}), but the components it cannot control, "
+            f"{', '.join(ignored)}, are missed by {_component_list(ignored, np.abs(e[W == 0]))} "
+            f"({why}); pass mask={W.tolist()} to accept a solution of the controlled components only")
+
+
+def _failure_reason(robot: "KinematicArm", q: np.ndarray, W: np.ndarray, e: np.ndarray, E: float,
                     tol: float, slimit: int, ilimit: int) -> str:
-    e = pose_error(robot.fkine(q), T)
     pos = float(np.linalg.norm(np.sqrt(W[:3]) * e[:3]))
     rot = float(np.linalg.norm(np.sqrt(W[3:]) * e[3:]))
     text = (f"no solution with residual < {tol:g} in {slimit} searches of {ilimit} iterations "
             f"(from q0 and seeded random starts): best residual {math.sqrt(E):.3g}, "
             f"position error {pos:.3g} m, rotation error {rot:.3g} rad on the masked components")
+    ignored = _names(W, solved=False)
+    if ignored:
+        text += f" ({', '.join(_names(W, True))}); ignored: {_component_list(ignored, np.abs(e[W == 0]))}"
     qlim = robot.qlim
     at_limit = [i + 1 for i in range(robot.n)
                 if np.isfinite(qlim[0, i]) and (abs(q[i] - qlim[0, i]) < 1e-9 or abs(q[i] - qlim[1, i]) < 1e-9)]

@@ -21,8 +21,10 @@ from .loading import load_description
 if TYPE_CHECKING:  # pragma: no cover
     import control
 
-    from .dynamics import Dynamics, DynamicsParameters, Workspace
+    from .dynamics import Dynamics, DynamicsParameters, Payload, Workspace
     from .ik import IKResult, IKSolution
+    from .compiled_kinematics import CompiledKinematics
+    from .description import LinkDescription
     from .kinematics import KinematicsFunctions
     from .singularity import SingularityReport
 
@@ -87,6 +89,12 @@ class Robot:
         return self.description.q_rest
 
     @property
+    def links(self) -> "tuple[LinkDescription, ...]":
+        """The description's links, joint 1 first (frozen: geometry m and rad, mass kg, COM m and
+        inertia kg m^2 in link frame i, motor and friction data); read-only."""
+        return self.description.links
+
+    @property
     def gear_ratio(self) -> np.ndarray:
         """(n,) reduction ratios G (motor angle = G q)."""
         return np.array([lk.gear_ratio for lk in self.description.links])
@@ -96,28 +104,40 @@ class Robot:
 
     # -------------------------------------------------------------- kinematics
     @cached_property
-    def kinematics(self) -> KinematicsFunctions:
-        """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe``."""
-        from .kinematics import build_kinematics  # CasADi: imported when kinematics is first used
+    def compiled_kinematics(self) -> "CompiledKinematics":
+        """The numeric kinematics (compiled C, built or loaded from the cache on first use)."""
+        from .compiled_kinematics import CompiledKinematics  # CasADi: imported when kinematics is first used
 
-        return build_kinematics(self.description)
+        return CompiledKinematics(self.description)
+
+    @property
+    def kinematics(self) -> "KinematicsFunctions":
+        """Named CasADi Functions ``fkine``, ``fkine_all``, ``jacob0``, ``jacobe`` (symbolic)."""
+        return self.compiled_kinematics.functions
 
     def fkine(self, q: Any) -> np.ndarray:
         """(4, 4) pose ``T_WE`` of the tool frame in the world frame (base and tool included); q in rad / m."""
-        return np.array(self.kinematics.fkine(self._q(q)))
+        return self.compiled_kinematics.fkine(q)
 
     def fkine_all(self, q: Any) -> np.ndarray:
         """(n+1, 4, 4) world poses of frame 0 (the base) and of every link frame (DH frame i for DH tables)."""
-        stacked = np.array(self.kinematics.fkine_all(self._q(q)))
-        return stacked.reshape(self.n + 1, 4, 4)
+        return self.compiled_kinematics.fkine_all(q)
 
     def jacob0(self, q: Any) -> np.ndarray:
         """(6, n) geometric Jacobian of the tool origin, rows [v; w], world-frame axes (m/s and rad/s per joint rate)."""
-        return np.array(self.kinematics.jacob0(self._q(q)))
+        return self.compiled_kinematics.jacob0(q)
 
     def jacobe(self, q: Any) -> np.ndarray:
         """(6, n) geometric Jacobian of the tool origin, rows [v; w], tool-frame axes."""
-        return np.array(self.kinematics.jacobe(self._q(q)))
+        return self.compiled_kinematics.jacobe(q)
+
+    def fkine_batch(self, Q: Any) -> np.ndarray:
+        """(N, 4, 4) tool poses ``T_WE`` at the N configurations of the (N, n) array ``Q``, one compiled call."""
+        return self.compiled_kinematics.fkine_batch(Q)
+
+    def jacob0_batch(self, Q: Any) -> np.ndarray:
+        """(N, 6, n) world-frame geometric Jacobians at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self.compiled_kinematics.jacob0_batch(Q)
 
     # ----------------------------------------------------------- singularities
     def manipulability(self, q: Any, axes: Sequence[bool] | str = "task") -> float:
@@ -176,6 +196,22 @@ class Robot:
         other._parameters = p
         return other
 
+    @property
+    def payload(self) -> "Payload":
+        """The payload of :attr:`parameters`: ``.mass`` kg, ``.com`` (3,) m and ``.inertia`` (3, 3) kg m^2
+        about the COM, both in frame n (the tip frame); mass 0 without one. Change it with :meth:`with_payload`."""
+        return self.parameters.payload
+
+    def with_payload(self, mass: float, com: Sequence[float] = (0.0, 0.0, 0.0),
+                     inertia: Sequence[float] = (0.0,) * 6) -> "Robot":
+        """A Robot carrying a rigid payload fixed to frame n (replacing any other), sharing this one's model.
+
+        The immutable counterpart of the Robotics Toolbox's ``robot.payload(m, p)``: ``mass`` kg,
+        ``com`` (3,) m in frame n, ``inertia`` (6,) ``[Ixx Iyy Izz Ixy Iyz Ixz]`` about the COM,
+        frame-n axes, kg m^2. Same as ``with_parameters(parameters.with_payload(...))``.
+        """
+        return self.with_parameters(self.parameters.with_payload(mass, com, inertia))
+
     def inertia(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n, n) joint-space inertia matrix B(q), kg m^2 / kg, motor inertia included.
 
@@ -219,6 +255,14 @@ class Robot:
         from .linearise import linearise
 
         return linearise(self, q0, qd0, u0, outputs)
+
+    def inertia_batch(self, Q: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
+        """(N, n, n) joint-space inertia B(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self.dynamics.inertia_batch(Q, self._parameters if p is None else p)
+
+    def gravload_batch(self, Q: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
+        """(N, n) gravity torque g(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self.dynamics.gravload_batch(Q, self._parameters if p is None else p)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays."""

@@ -134,7 +134,8 @@ def time_grid(T: float, dt: float, t0: float = 0.0) -> Array:
 
 def _sample_times(T: float, dt: float | None, t: Any, t0: float) -> tuple[Array, float | None]:
     if (dt is None) == (t is None):
-        raise ValueError("dt, t: give exactly one of dt (sampling period, s) or t (sample times, s)")
+        raise ValueError("dt, t: give exactly one of dt (sampling period, s) or t (sample times, s), "
+                         "or a sample count or a time vector in place of T")
     if t is not None:
         return _times(t), None
     return time_grid(T, dt, t0), float(dt)  # type: ignore[arg-type]
@@ -369,47 +370,74 @@ def _sampled(path: JointPath, t: Array, dt: float | None, t_via: Array, q_via: A
 # --------------------------------------------------------------------------- joint planners
 
 
-def jtraj(q0: npt.ArrayLike, qf: npt.ArrayLike, T: float, dt: float | None = None, *,
+def jtraj(q0: npt.ArrayLike, qf: npt.ArrayLike, T: Any, dt: float | None = None, *,
           t: npt.ArrayLike | None = None, t0: float = 0.0,
-          qd0: npt.ArrayLike | None = None, qdf: npt.ArrayLike | None = None) -> Trajectory:
-    """Quintic point-to-point joint trajectory.
+          qd0: npt.ArrayLike | None = None, qd1: npt.ArrayLike | None = None,
+          qdf: npt.ArrayLike | None = None) -> Trajectory:
+    """Quintic point-to-point joint trajectory, in SI time or in the Robotics Toolbox's forms.
 
     Each joint follows the quintic with the given boundary positions and
     velocities and zero boundary accelerations; with zero boundary velocities
     it is ``q0 + (qf - q0) (10 s^3 - 15 s^4 + 6 s^5)``, ``s = (t - t0)/T``.
+
+    The third argument reads as in the Robotics Toolbox when neither ``dt`` nor ``t`` is given:
+
+    * ``jtraj(q0, qf, 50)``, an integer: 50 samples on the normalised time ``t = 0 .. 1``
+      (velocities and accelerations per unit of that time, as the toolbox's; its ``.t``
+      is the same grid scaled by the count, ours is the grid itself);
+    * ``jtraj(q0, qf, tv)``, a 1-D time vector, s: the path runs from 0 to ``max(tv)`` and is
+      sampled at ``tv``.
+
+    Otherwise it is the duration ``T`` in seconds, sampled every ``dt`` or at ``t``.
 
     Parameters
     ----------
     q0, qf
         (n,) start and end positions, rad or m.
     T
-        Duration, s (> 0).
+        Duration, s (> 0), with ``dt`` or ``t``; or, alone, a sample count (int >= 2) or a
+        time vector (s) as above.
     dt
         Sampling period, s: samples at ``t0 + k dt``. Give either ``dt`` or ``t``.
     t
         (N,) sample times, s, strictly increasing.
     t0
         Start time, s.
-    qd0, qdf
-        (n,) boundary velocities, rad/s or m/s (default zero).
+    qd0, qd1
+        (n,) start and end velocities, rad/s or m/s (default zero); ``qdf`` is another name
+        for ``qd1``.
 
     Returns
     -------
     Trajectory
+        ``.t`` (N,), ``.q``, ``.qd``, ``.qdd`` (N, n).
 
     Raises
     ------
     ValueError
         Naming the argument: shapes differ, a value is NaN/inf, ``T <= 0``,
-        ``T`` not a multiple of ``dt``.
+        ``T`` not a multiple of ``dt``, a count below 2.
     """
+    if qd1 is not None and qdf is not None:
+        raise ValueError("qd1, qdf: two names for the end velocity; give one")
+    qd_end = qd1 if qd1 is not None else qdf
+    if dt is None and t is None:
+        if isinstance(T, (int, np.integer)) and not isinstance(T, (bool, np.bool_)):
+            if T < 2:
+                raise ValueError(f"T: expected a sample count >= 2 (the toolbox's form), got {T!r}")
+            return jtraj(q0, qf, 1.0, t=np.linspace(0.0, 1.0, int(T)), qd0=qd0, qd1=qd_end)
+        if isinstance(T, (list, tuple, np.ndarray)) and np.ndim(T) == 1:
+            times = _times(T, "T")
+            if times[0] < 0.0:
+                raise ValueError(f"T: expected a time vector from 0 s on (the toolbox's form), got {times[0]!r} s first")
+            return jtraj(q0, qf, float(times[-1]), t=times, qd0=qd0, qd1=qd_end)
     a = _vector(q0, "q0")
     n = a.size
     b = _vector(qf, "qf", n)
     T = _scalar(T, "T", positive=True)
     t0 = _scalar(t0, "t0")
     va = np.zeros(n) if qd0 is None else _vector(qd0, "qd0", n)
-    vb = np.zeros(n) if qdf is None else _vector(qdf, "qdf", n)
+    vb = np.zeros(n) if qd_end is None else _vector(qd_end, "qd1" if qd1 is not None else "qdf", n)
     times, step = _sample_times(T, dt, t, t0)
     zero = np.zeros((1, n))
     path = JointPath([t0, t0 + T], np.vstack([a, b]), np.vstack([va, vb]), zero, zero)

@@ -140,3 +140,17 @@ def test_clik_argument_errors() -> None:
         clik(arm, segment, SEED_Q0, dt=0.01, K=10.0, inversion="svd")
     with pytest.raises(ValueError, match=r"tf - t0 = 1.0 s: expected a positive integer multiple of dt = 0.003 s"):
         clik(arm, segment, SEED_Q0, dt=0.003, K=10.0)
+
+
+def test_clik_names_the_uncontrolled_components_and_their_miss() -> None:
+    """z left out of the mask: x, y track; the z miss is reported and equals the one recomputed here."""
+    arm = load_robot("spherical")
+    q0 = np.array([0.2, 0.8, 0.6])
+    p0 = arm.fkine(q0)[:3, 3]
+    segment = straight_line(p0, p0 + [0.1, 0.05, -0.1], 1.0)
+    res = clik(arm, segment, q0, dt=2e-3, K=50.0, inversion="pinv", mask=[True, True, False])
+    assert res.solved == ("x", "y") and res.ignored == ("z",)
+    assert res.error_norm.max() < 1e-4  # x and y as in the full task
+    z_miss = max(abs(segment(float(t))[0][2] - arm.fkine(q)[2, 3]) for t, q in zip(res.t, res.q))
+    assert res.ignored_error_max["z"] == pytest.approx(z_miss, rel=1e-12)
+    assert z_miss > 1e-2  # the 0.1 m drop is not followed by an uncontrolled z

@@ -590,3 +590,103 @@ def test_task_rows_of_a_rotated_base_are_those_of_the_chain() -> None:
         assert moved.manipulability(q) == pytest.approx(plain.manipulability(q), rel=1e-12)
     with pytest.raises(ValueError, match=r"mask: robot 'scara' has 4 joints and no recognised structure aligned"):
         default_mask(moved)
+
+
+# --------------------------------------------------------------------------- solved and ignored components
+#
+# Tolerances: ikine stops at a masked residual below tol = 1e-10 (m, rad); 1e-9 on a component
+# leaves room for the log-map rounding. The 0.3 rad tilt is checked to 1e-9 rad against the
+# angle between the tool z axes computed here with arccos, not through pose_error.
+
+
+def _tilted_about_world_x(T: np.ndarray, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    out = T.copy()
+    out[:3, :3] = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]) @ T[:3, :3]
+    return out
+
+
+def test_ikine_tilted_scara_target_is_not_a_success(robots: dict[str, Robot]) -> None:
+    scara = robots["scara"]
+    T = _tilted_about_world_x(scara.fkine([0.3, 0.5, 1.0, 0.2]), 0.3)
+    res = ikine(scara, T, slimit=4)
+    assert not res.success and not res.mask_given
+    assert res.searches == 1  # every SCARA axis is vertical: no restart can tilt the tool
+    assert res.solved == ("x", "y", "z", "rz") and res.ignored == ("rx", "ry")
+    # the masked search converged: the old rule (masked residual < tol) called this a success
+    assert res.residual < 1e-10
+    assert np.abs(res.error[[0, 1, 2, 5]]).max() < 1e-9
+    # the miss is the tilt, named and measured: 0.3 rad about x, nothing about y
+    assert abs(res.ignored_error["rx"] - 0.3) < 1e-9 and abs(res.ignored_error["ry"]) < 1e-9
+    z_reached, z_target = scara.fkine(res.q)[:3, 2], T[:3, 2]
+    assert abs(math.acos(np.clip(z_reached @ z_target, -1, 1)) - 0.3) < 1e-9
+    assert abs(res.rotation_error - 0.3) < 1e-9
+    assert re.search(r"outside what the scara structure of 'scara' can reach: the search solved x, y, z, rz.*"
+                     r"rx, ry, are missed by rx 0\.3 rad, ry .* rad \(no configuration changes them: every joint "
+                     r"axis is along the world z axis\); pass mask=\[1\.0, 1\.0, 1\.0, 0\.0, 0\.0, 1\.0\]",
+                     res.reason)
+    assert res.summary().startswith("ikine failed: the target pose is outside")
+
+
+def test_ikine_tilted_scara_target_with_a_given_mask_states_what_it_ignored(robots: dict[str, Robot]) -> None:
+    scara = robots["scara"]
+    T = _tilted_about_world_x(scara.fkine([0.3, 0.5, 1.0, 0.2]), 0.3)
+    res = scara.ikine(T, mask=[1, 1, 1, 0, 0, 1])
+    assert res.success and res.mask_given and res.searches == 1
+    assert res.ignored == ("rx", "ry") and abs(res.ignored_error["rx"] - 0.3) < 1e-9
+    assert re.fullmatch(r"converged on the masked components x, y, z, rz; ignored by the given mask: rx, ry, "
+                        r"missed by rx 0\.3 rad, ry \S+ rad", res.reason)
+
+
+def test_ikine_reachable_scara_target_succeeds(robots: dict[str, Robot]) -> None:
+    scara = robots["scara"]
+    T = scara.fkine([0.3, 0.5, 1.0, 0.2])
+    res = ikine(scara, T, q0=[-0.4, 1.0, 0.5, 0.0])
+    assert res.success and res.ignored == ("rx", "ry")
+    assert np.abs(res.error).max() < 1e-9  # all six, the ignored ones too
+    assert np.abs(pose_error(scara.fkine(res.q), T)).max() < 1e-9
+    assert res.reason.startswith("converged on x, y, z, rz; the default mask ignored rx, ry")
+
+
+def test_ikine_tilt_negative_control(robots: dict[str, Robot]) -> None:
+    """The full-pose check is what separates the two: a tilt below tol passes, one just above it fails."""
+    scara = robots["scara"]
+    T = scara.fkine([0.3, 0.5, 1.0, 0.2])
+    assert ikine(scara, _tilted_about_world_x(T, 1e-12), slimit=2).success
+    res = ikine(scara, _tilted_about_world_x(T, 1e-8), slimit=2)
+    assert not res.success and res.residual < 1e-10 and abs(res.ignored_error["rx"] - 1e-8) < 1e-11
+
+
+def test_ikine_six_joint_arm_solves_every_component(robots: dict[str, Robot]) -> None:
+    puma = robots["puma560"]
+    T = puma.fkine([0.1, -0.4, 0.3, 0.4, 0.5, 0.6])
+    res = puma.ikine(T)
+    assert res.success and res.reason == "converged" and not res.mask_given
+    assert res.solved == ("x", "y", "z", "rx", "ry", "rz") and res.ignored == () and res.ignored_error == {}
+    assert res.position_error < 1e-9 and res.rotation_error < 1e-9
+
+
+def test_ikine_restarts_past_a_branch_with_the_wrong_orientation(robots: dict[str, Robot]) -> None:
+    """Spherical arm, position-only default mask: started on the branch with the same tool position
+    but another orientation, the search solves the position at once, and keeps searching until it
+    finds the branch that reaches the full pose."""
+    arm = robots["spherical"]
+    T = arm.fkine([0.4, 0.7, 0.6])
+    other = next(s.q for s in ikine_a(arm, T) if s.branch == "shoulder-right")
+    assert np.abs(arm.fkine(other)[:3, 3] - T[:3, 3]).max() < 1e-9 and np.abs(pose_error(arm.fkine(other), T)).max() > 0.1
+    res = ikine(arm, T, q0=other)
+    assert res.success and res.searches > 1
+    assert np.abs(res.q - [0.4, 0.7, 0.6]).max() < 1e-6
+    given = ikine(arm, T, q0=other, mask=[1, 1, 1, 0, 0, 0])  # a given mask accepts the first branch, and says so
+    assert given.success and given.searches == 1 and given.rotation_error > 0.1 and "ignored by the given mask" in given.reason
+
+
+def test_ikine_restarts_when_a_branch_can_change_an_ignored_component(robots: dict[str, Robot]) -> None:
+    """Planar 2R, default mask x, y: the tool heading rz is ignored but differs between the elbow
+    branches, so it is not fixed by the structure; from the wrong branch the search restarts."""
+    arm = robots["planar2r"]
+    T = arm.fkine([0.4, 0.7])
+    other = next(s.q for s in ikine_a(arm, T) if abs(s.q[1] + 0.7) < 1e-9)
+    assert abs(pose_error(arm.fkine(other), T)[5]) > 0.1
+    res = ikine(arm, T, q0=other)
+    assert res.success and res.searches > 1 and np.abs(res.error).max() < 1e-9

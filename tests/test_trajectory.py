@@ -521,3 +521,61 @@ def test_straight_line_segment_callable():
 def test_cartesian_rejects_bad_input(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+# --------------------------------------------------------------------------- jtraj in the toolbox's form
+#
+# Against roboticstoolbox.jtraj: the same quintic in another basis (monomials in s), so the two differ
+# by rounding, ~1e-14 times the size of the values (qdd reaches ~60 |qf - q0| = ~200 here);
+# 1e-12 relative to the largest value leaves a margin of 10x. A wrong coefficient moves them by O(1).
+
+
+def _toolbox_close(ours, ref) -> None:
+    for name in ("q", "qd", "qdd"):
+        a, b = getattr(ours, name), getattr(ref, name)
+        assert a.shape == b.shape, name
+        assert np.abs(a - b).max() <= 1e-12 * max(1.0, np.abs(b).max()), name
+
+
+@pytest.mark.parametrize("velocities", [False, True])
+def test_jtraj_sample_count_is_the_toolbox_form(rng, velocities):
+    q0, qf = rng.uniform(-2, 2, 4), rng.uniform(-2, 2, 4)
+    v = dict(qd0=rng.uniform(-1, 1, 4), qd1=rng.uniform(-1, 1, 4)) if velocities else {}
+    tr = jtraj(q0, qf, 50, **v)
+    ref = rtb.jtraj(q0, qf, 50, **v)
+    assert tr.q.shape == (50, 4) and tr.t[0] == 0.0 and tr.t[-1] == 1.0  # normalised time
+    np.testing.assert_allclose(ref.t, tr.t * 50, rtol=1e-15)  # the toolbox's .t is the grid times the count
+    _toolbox_close(tr, ref)
+
+
+def test_jtraj_time_vector_is_the_toolbox_form(rng):
+    q0, qf, v0, v1 = (rng.uniform(-2, 2, 3) for _ in range(4))
+    tv = np.linspace(0.0, 2.5, 26)
+    tr = jtraj(q0, qf, tv, qd0=v0, qd1=v1)
+    ref = rtb.jtraj(q0, qf, tv, qd0=v0, qd1=v1)
+    np.testing.assert_array_equal(tr.t, ref.t)
+    _toolbox_close(tr, ref)
+    np.testing.assert_allclose(tr.qd[0], v0, atol=1e-14)  # velocities in rad/s: the vector is in seconds
+    # same as the SI form, and qd1 is qdf
+    si = jtraj(q0, qf, 2.5, t=tv, qd0=v0, qdf=v1)
+    np.testing.assert_array_equal(si.q, tr.q)
+
+
+def test_jtraj_toolbox_comparison_can_fail(rng):
+    """Negative control: swapped boundary velocities are caught."""
+    q0, qf, v0, v1 = (rng.uniform(-2, 2, 3) for _ in range(4))
+    tr = jtraj(q0, qf, 20, qd0=v1, qd1=v0)
+    with pytest.raises(AssertionError):
+        _toolbox_close(tr, rtb.jtraj(q0, qf, 20, qd0=v0, qd1=v1))
+
+
+@pytest.mark.parametrize(("args", "kwargs", "match"), [
+    ((1,), {}, r"T: expected a sample count >= 2 \(the toolbox's form\), got 1"),
+    ((True,), {}, r"T: expected a number, got True"),
+    (([-1.0, 0.0, 1.0],), {}, r"T: expected a time vector from 0 s on"),
+    (([0.0, 0.5, 0.2],), {}, r"T: expected strictly increasing"),
+    ((10,), {"qd1": [0, 0], "qdf": [0, 0]}, r"qd1, qdf: two names for the end velocity"),
+])
+def test_jtraj_toolbox_form_rejects_bad_input(args, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        jtraj([0.0, 0.0], [1.0, 1.0], *args, **kwargs)

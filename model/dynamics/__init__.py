@@ -2,7 +2,7 @@
 
 from .core import Dynamics, NoCompilerWarning
 from .motors import MOTOR_MODELS
-from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
+from .parameters import DynamicsParameters, ParameterLayout, Payload, parameter_layout
 from .symbolic import DynamicsFunctions, build_functions
 from .workspace import Workspace
 
@@ -13,6 +13,7 @@ __all__ = [
     "MOTOR_MODELS",
     "NoCompilerWarning",
     "ParameterLayout",
+    "Payload",
     "Workspace",
     "build_functions",
     "parameter_layout",

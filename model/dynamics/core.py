@@ -9,17 +9,15 @@ from __future__ import annotations
 
 import hashlib
 import math
-import threading
-import warnings
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Sequence
 
-import casadi as ca
 import numpy as np
 
-from ..arrays import finite_vector, shaped_vector
-from ..codegen import BuildInfo, CompiledLibrary, CompilerNotFoundError, Progress, build_library
+from ..arrays import finite_vector, joint_batch, shaped_vector
+from ..codegen import (BuildInfo, CompiledLibrary, CompilerNotFoundError, LazyLibrary, NoCompilerWarning, Progress,
+                       casadi_evaluate)
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
@@ -42,10 +40,6 @@ def source_fingerprint() -> str:
     return h.hexdigest()
 
 
-class NoCompilerWarning(RuntimeWarning):
-    """No C compiler: the numeric API evaluates with CasADi (correct, but much slower)."""
-
-
 _F64 = np.dtype(np.float64)
 
 
@@ -57,16 +51,6 @@ def _shaped(value: Any, size: int, name: str) -> np.ndarray:
 def _vector(value: Any, size: int, name: str, what: str = "values") -> np.ndarray:
     """A finite, contiguous vector of shape (size,) (see :func:`model.arrays.finite_vector`)."""
     return finite_vector(value, size, name, what)
-
-
-def _batch(value: Any, n: int, name: str) -> np.ndarray:
-    arr = np.ascontiguousarray(value, dtype=np.float64)
-    if arr.ndim != 2 or arr.shape[1] != n:
-        raise ValueError(f"{name}: expected an (N, {n}) array, got shape {np.shape(value)}")
-    if not np.all(np.isfinite(arr)):
-        rows = np.unique(np.nonzero(~np.isfinite(arr))[0])
-        raise ValueError(f"{name}: expected finite values; rows {rows[:5].tolist()} are not")
-    return arr
 
 
 class Dynamics:
@@ -97,15 +81,15 @@ class Dynamics:
         self.n = description.n
         self.layout: ParameterLayout = parameter_layout(description)
         self._defaults = DynamicsParameters.defaults(self.layout)
-        self._library: CompiledLibrary | None = None
-        self._build_info: BuildInfo | None = None
-        self._fallback = False
-        self._lock = threading.Lock()
+        key = lambda: (f"{description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}"  # noqa: E731
+                       f"|{source_fingerprint()}")
+        funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
+        self._lazy = LazyLibrary(f"{description.identifier}-{self.motor_model}", key, funcs, "the dynamics")
         # Idle workspaces of the current library, borrowed for one call (list.pop / append are atomic).
         self._pool: list[Workspace] = []
 
     def __repr__(self) -> str:
-        state = "compiled" if self._library else ("casadi" if self._fallback else "not built")
+        state = self._lazy.state()
         return f"Dynamics({self.description.name!r}, motor_model={self.motor_model!r}, {state})"
 
     # ------------------------------------------------------------ parameters
@@ -146,7 +130,7 @@ class Dynamics:
     @property
     def build_info(self) -> BuildInfo | None:
         """What the last :meth:`compile` did (None before it ran)."""
-        return self._build_info
+        return self._lazy.build_info
 
     def compile(self, *, force: bool = False, progress: Progress | None = None) -> BuildInfo:
         """Build (or load from the cache) the compiled library of the numeric API.
@@ -161,38 +145,25 @@ class Dynamics:
 
         Raises :class:`~model.codegen.CompilerNotFoundError` without a C compiler.
         """
-        with self._lock:
-            if self._library is not None and not force:
-                assert self._build_info is not None
-                return self._build_info
-            key = (f"{self.description.digest()}|{self.motor_model}|{','.join(COMPILED_FUNCTIONS)}"
-                   f"|{source_fingerprint()}")
-            stem = f"{self.description.identifier}-{self.motor_model}"
-            funcs = lambda: [getattr(self.functions, name) for name in COMPILED_FUNCTIONS]  # noqa: E731
-            self._library, self._build_info = build_library(stem, key, funcs, force=force, progress=progress)
-            self._fallback = False
+        before = self._lazy.library
+        info = self._lazy.compile(force=force, progress=progress)
+        if self._lazy.library is not before:
             self._pool = []
-            return self._build_info
+        return info
+
+    @property
+    def _library(self) -> CompiledLibrary | None:
+        return self._lazy.library
 
     def _backend(self) -> CompiledLibrary | None:
-        if self._library is None and not self._fallback:
-            try:
-                self.compile()
-            except CompilerNotFoundError as exc:
-                warnings.warn(f"{exc}; evaluating the dynamics with CasADi instead", NoCompilerWarning, stacklevel=3)
-                self._fallback = True
-        return self._library
+        return self._lazy.backend(stacklevel=3)
 
     def _eval(self, name: str, inputs: Sequence[np.ndarray], n_points: int) -> np.ndarray:
         """(n_points, numel) first output of Function ``name``; rows are states, matrices column-major."""
         lib = self._backend()
         if lib is not None:
             return lib.evaluate(name, inputs, n_points)[0]
-        f: ca.Function = getattr(self.functions, name)
-        cols = [a.T if a.ndim == 2 else a for a in inputs]
-        out = np.array(f.map(n_points)(*cols) if n_points > 1 else f(*cols))  # (rows, cols * n_points)
-        rows, cols_per_point = f.size1_out(0), f.size2_out(0)
-        return out.reshape(rows, n_points, cols_per_point).transpose(1, 2, 0).reshape(n_points, -1)
+        return casadi_evaluate(getattr(self.functions, name), inputs, n_points)
 
     def _point(self, name: str, values: tuple[Any, ...], names: tuple[str, ...], p: DynamicsParameters | None,
                ws: Workspace | None) -> np.ndarray:
@@ -276,23 +247,35 @@ class Dynamics:
         """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)``."""
         return self._point("accel", (q, qd, tau), ("q", "qd", "tau"), p, ws)
 
-    def _batch3(self, name: str, A: Any, Bv: Any, Cv: Any, names: tuple[str, str, str],
-                p: DynamicsParameters | None) -> np.ndarray:
+    def _batch(self, name: str, values: tuple[Any, ...], names: tuple[str, ...],
+               p: DynamicsParameters | None, width: int | None = None) -> np.ndarray:
+        """(N, width) output of Function ``name`` (width: its size, default n) at the rows of the (N, n)
+        arrays ``values``, one call."""
         params = self.parameters if p is None else self.check_parameters(p)
         n = self.n
-        arrays = [_batch(v, n, k) for v, k in zip((A, Bv, Cv), names)]
+        width = n if width is None else width
+        arrays = [joint_batch(v, n, k) for v, k in zip(values, names)]
         N = arrays[0].shape[0]
         for arr, k in zip(arrays[1:], names[1:]):
             if arr.shape[0] != N:
                 raise ValueError(f"{k}: expected {N} rows like {names[0]}, got shape {arr.shape}")
         if N == 0:
-            return np.empty((0, n))
+            return np.empty((0, width))
         return self._eval(name, [*arrays, params.vector], N)
+
+    def inertia_batch(self, Q: Any, p: DynamicsParameters | None = None) -> np.ndarray:
+        """(N, n, n) joint-space inertia B(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        n = self.n
+        return self._batch("inertia", (Q,), ("Q",), p, n * n).reshape(-1, n, n).transpose(0, 2, 1)  # rows are column-major
+
+    def gravload_batch(self, Q: Any, p: DynamicsParameters | None = None) -> np.ndarray:
+        """(N, n) gravity torque g(q) at the N rows of the (N, n) array ``Q``, one compiled call."""
+        return self._batch("gravload", (Q,), ("Q",), p)
 
     def rne_batch(self, Q: Any, QD: Any, QDD: Any, p: DynamicsParameters | None = None) -> np.ndarray:
         """(N, n) inverse dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch3("rne", Q, QD, QDD, ("Q", "QD", "QDD"), p)
+        return self._batch("rne", (Q, QD, QDD), ("Q", "QD", "QDD"), p)
 
     def accel_batch(self, Q: Any, QD: Any, TAU: Any, p: DynamicsParameters | None = None) -> np.ndarray:
         """(N, n) forward dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch3("accel", Q, QD, TAU, ("Q", "QD", "TAU"), p)
+        return self._batch("accel", (Q, QD, TAU), ("Q", "QD", "TAU"), p)

@@ -27,6 +27,7 @@ from ..description import RobotDescription
 
 __all__ = [
     "DynamicsParameters",
+    "Payload",
     "ParameterLayout",
     "SymbolicParameters",
     "parameter_layout",
@@ -155,6 +156,37 @@ def _friction(n: int, name: str, value: Any, sign: float, expect: str) -> np.nda
 
 
 @dataclass(frozen=True, eq=False)
+class Payload:
+    """A rigid payload fixed to frame n (the tip frame: DH frame n of a DH table, body n of a urdf).
+
+    Attributes
+    ----------
+    mass
+        kg (0: no payload).
+    com
+        (3,) centre of mass in frame n, m.
+    inertia
+        (3, 3) inertia about the centre of mass, frame-n axes, kg m^2 (zeros: a point mass).
+    """
+
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+
+    def __post_init__(self) -> None:
+        for name in ("com", "inertia"):
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    @property
+    def inertia6(self) -> np.ndarray:
+        """(6,) ``[Ixx Iyy Izz Ixy Iyz Ixz]`` of :attr:`inertia`, kg m^2 (the order of ``with_payload``)."""
+        I = self.inertia
+        return np.array([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]])
+
+
+@dataclass(frozen=True, eq=False)
 class DynamicsParameters:
     """An immutable value of the parameter vector ``p`` of one robot (layout :class:`ParameterLayout`).
 
@@ -214,6 +246,14 @@ class DynamicsParameters:
     def payload_mass(self) -> float:
         """Payload mass, kg."""
         return float(self.vector[self.layout.slices["payload_mass"]][0])
+
+    @property
+    def payload(self) -> Payload:
+        """The payload: mass (kg), centre of mass (m) and inertia (kg m^2) in frame n."""
+        v, sl = self.vector, self.layout.slices
+        six = v[sl["payload_inertia"]]
+        I = np.array([[six[0], six[3], six[5]], [six[3], six[1], six[4]], [six[5], six[4], six[2]]])
+        return Payload(mass=float(v[sl["payload_mass"]][0]), com=v[sl["payload_com"]].copy(), inertia=I)
 
     @property
     def viscous_friction(self) -> np.ndarray:
