@@ -37,7 +37,6 @@ if TYPE_CHECKING:  # pragma: no cover
     import viser
 
     from model.robot import Robot
-    from model.singularity import SingularityReport
 
     from .replay import Replay
 
@@ -56,8 +55,9 @@ __all__ = [
     "start_teach",
 ]
 
-#: Tolerance of the "near a singularity" mark: the singularity report at this ``tol`` (smallest singular
-#: value at most 5 % of the largest, or a named condition such as |sin theta2| < 0.05, i.e. within 2.9 deg).
+#: Tolerance of the "near a singularity" mark (:func:`readout`): a structure's named condition at this ``tol``
+#: (e.g. |sin theta2| < 0.05, within 2.9 deg of the SCARA's stretched elbow), else a smallest singular value
+#: of the task Jacobian at most 5 % of the largest.
 NEAR_SINGULAR_TOL = 0.05
 #: The address the page binds unless told otherwise.
 LOOPBACK = "127.0.0.1"
@@ -116,38 +116,52 @@ class Readout:
         (3,) roll, pitch, yaw of ``T_WE``, rad: ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
     manipulability
         ``robot.manipulability(q)`` on the structure's task rows.
+    task
+        Names of those rows (``("x", "y", "z", "rz")`` for a SCARA).
     near
-        The singularity report at :data:`NEAR_SINGULAR_TOL`.
+        Why the arm is near a singularity, empty when it is not (:func:`readout`).
     """
 
     q: np.ndarray
     T: np.ndarray
     rpy: np.ndarray
     manipulability: float
-    near: "SingularityReport"
+    task: tuple[str, ...]
+    near: tuple[str, ...]
 
     @property
     def near_singular(self) -> bool:
         """Whether the arm is within :data:`NEAR_SINGULAR_TOL` of a singularity."""
-        return bool(self.near.singular)
+        return bool(self.near)
 
     def singularity_text(self) -> str:
-        """One line: ``"no singularity near"`` or what the report names (its named conditions, else its rank)."""
-        if not self.near.singular:
-            return "no singularity near"
-        named = self.near.reasons[1:] or self.near.reasons[:1]
-        return "; ".join(named)
+        """One line: ``"no singularity near"`` or the reasons."""
+        return "; ".join(self.near) if self.near else "no singularity near"
 
 
 def readout(robot: "Robot", q: Sequence[float]) -> Readout:
-    """The page's numbers at ``q`` (n,), rad or m: ``fkine``, its roll-pitch-yaw, manipulability, singularity."""
+    """The page's numbers at ``q`` (n,), rad or m: ``fkine``, its roll-pitch-yaw, manipulability, singularity.
+
+    Near a singularity means: for a recognised structure (:mod:`model.closed_form`), one
+    of its named singular conditions holds at ``tol = NEAR_SINGULAR_TOL`` (e.g. the SCARA's
+    elbow stretched, ``|sin theta2| < 0.05``); otherwise the singularity report at that
+    ``tol`` (smallest singular value of the task Jacobian at most 5 % of the largest).
+    """
     from scipy.spatial.transform import Rotation
+
+    from model.closed_form import closed_form_for, joint_values
 
     q = np.asarray(q, dtype=float)
     T = robot.fkine(q)
     yaw, pitch, roll = Rotation.from_matrix(T[:3, :3]).as_euler("ZYX")
+    report = robot.singularities(q, tol=NEAR_SINGULAR_TOL)
+    form = closed_form_for(robot.description)
+    if form is not None:
+        near = tuple(form.singular_conditions(joint_values(robot.description, q), NEAR_SINGULAR_TOL))
+    else:
+        near = tuple(report.reasons[:1])
     return Readout(q=q, T=T, rpy=np.array([roll, pitch, yaw]), manipulability=robot.manipulability(q),
-                   near=robot.singularities(q, tol=NEAR_SINGULAR_TOL))
+                   task=report.task, near=near)
 
 
 def format_pose(r: Readout, units: DisplayUnits) -> str:
@@ -224,8 +238,8 @@ def _z_to(axis: np.ndarray) -> np.ndarray:
     """(3, 3) a rotation taking z onto the unit ``axis`` (viser's cylinders stand on z)."""
     z = np.array([0.0, 0.0, 1.0])
     v, c = np.cross(z, axis), float(z @ axis)
-    if np.linalg.norm(v) < 1e-12:
-        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+    if 1.0 + c < 1e-9:  # axis = -z (to round-off): half a turn about x
+        return np.diag([1.0, -1.0, -1.0])
     K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
     return np.eye(3) + K + K @ K / (1.0 + c)
 
@@ -388,7 +402,7 @@ class TeachPage:
 
     def _show(self, r: Readout) -> None:
         self._pose_md.content = format_pose(r, self.units)
-        self._manip_md.content = f"manipulability ({' '.join(r.near.task)}): **{r.manipulability:.4g}**"
+        self._manip_md.content = f"manipulability ({' '.join(r.task)}): **{r.manipulability:.4g}**"
         if r.near_singular:
             self._sing_md.content = f"**⚠ near a singularity**: {r.singularity_text()}"
         else:
