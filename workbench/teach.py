@@ -175,20 +175,10 @@ def format_pose(r: Readout, units: DisplayUnits) -> str:
 
 
 def joint_frames(robot: "Robot", T_links: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """World origin and unit axis of every joint, from the model's link frames ``T_links = fkine_all(q)``.
+    """World origin and unit axis of every joint, from the model's link frames ``T_links = fkine_all(q)``."""
+    from model.chain import build_chain, joint_axes
 
-    Joint i moves body i about its axis, placed in body i-1 (:class:`model.chain.Chain`): its
-    frame is ``T_W,body(i-1) P_i`` with ``T_W,body(i-1) = fkine_all[i-1] F_(i-1)^-1``.
-    """
-    from model.chain import build_chain
-
-    chain = build_chain(robot.description)
-    out = []
-    for i in range(robot.n):
-        body = T_links[0] if i == 0 else T_links[i] @ np.linalg.inv(chain.reported[i - 1])
-        J = body @ chain.placements[i]
-        out.append((J[:3, 3].copy(), J[:3, :3] @ chain.axes[i]))
-    return out
+    return joint_axes(build_chain(robot.description), T_links)
 
 
 def is_loopback(host: str) -> bool:
