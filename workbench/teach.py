@@ -308,8 +308,9 @@ class TeachPage:
         self._target = scene.add_transform_controls("/target", scale=0.35 * s)
         self._target.on_update(lambda _event: self._solve_target())
         cam = self.server.initial_camera
-        cam.position = (1.0 * s, -1.2 * s, 0.8 * s)
-        cam.look_at = tuple(float(v) for v in self.robot.fkine_all(self.q)[:, :3, 3].mean(axis=0))
+        centre = self.robot.fkine_all(self.q)[:, :3, 3].mean(axis=0)
+        cam.look_at = tuple(float(v) for v in centre)
+        cam.position = tuple(float(v) for v in centre + np.array([0.45, -0.6, 0.45]) * s)
 
     def _draw(self, T_links: np.ndarray, T_tool: np.ndarray) -> None:
         origins = np.vstack([T_links[:, :3, 3], T_tool[None, :3, 3]])
