@@ -18,18 +18,9 @@ import threading
 import warnings
 from typing import Any
 
-__all__ = ["register", "run_teach", "port_number"]
+from .args import bounded_int
 
-
-def port_number(text: str) -> int:
-    """argparse type: a TCP port 1..65535."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a port number 1..65535, got {text!r}") from None
-    if not 1 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"expected a port number 1..65535, got {text!r}")
-    return value
+__all__ = ["register", "run_teach"]
 
 
 def _replays(robot: Any, result: str | None) -> dict:
@@ -86,7 +77,7 @@ def register(subparsers: Any) -> None:
     """Add the ``teach`` sub-command to ``manip``'s sub-parsers."""
     p = subparsers.add_parser("teach", help="drive the arm in a browser: joint sliders, tool pose, IK target, playback")
     p.add_argument("robot", help="built-in name, TOML or URDF file")
-    p.add_argument("--port", type=port_number, default=None, metavar="N", help="port to serve on (default: a free one)")
+    p.add_argument("--port", type=bounded_int(1, 65535, "a port number"), default=None, metavar="N", help="port to serve on (default: a free one)")
     p.add_argument("--host", default="127.0.0.1", metavar="ADDR",
                    help="address to bind (default 127.0.0.1; anything else is reachable from other machines)")
     p.add_argument("--no-browser", action="store_true", help="print the address only, do not open a browser")

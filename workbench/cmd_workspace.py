@@ -12,19 +12,10 @@ import argparse
 import sys
 from typing import Any
 
+from .args import bounded_int
 from .outputs import out_file, save_figure
 
 __all__ = ["register", "run_workspace"]
-
-
-def _samples(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of samples, got {text!r}") from None
-    if not 100 <= value <= 5_000_000:
-        raise argparse.ArgumentTypeError(f"expected 100 to 5000000 samples, got {text!r}")
-    return value
 
 
 def run_workspace(args: argparse.Namespace) -> int:
@@ -51,6 +42,6 @@ def register(subparsers: Any) -> None:
     p = subparsers.add_parser("workspace", help="the reachable workspace of the tool point: figure with its sections")
     p.add_argument("robot", help="built-in name, TOML or URDF file")
     p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="the figure to write (PNG, atomically)")
-    p.add_argument("--samples", type=_samples, default=200_000, metavar="N", help="joint samples (default 200000)")
+    p.add_argument("--samples", type=bounded_int(100, 5_000_000, "a number of samples"), default=200_000, metavar="N", help="joint samples (default 200000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.set_defaults(func=run_workspace)
