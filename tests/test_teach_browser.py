@@ -81,7 +81,7 @@ def _browser(tmp_path: Path):
     opts = webdriver.ChromeOptions()
     opts.binary_location = CHROMIUM
     for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run", "--window-size=1400,900",
+                 "--disable-component-update", "--disable-sync", "--no-first-run", "--window-size=1100,750",
                  f"--user-data-dir={tmp_path / 'chromium-profile'}"):
         opts.add_argument(flag)
     return webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
@@ -123,12 +123,13 @@ def test_slider_moves_the_pose_the_page_shows_equals_fkine(tmp_path):
         sliders = _wait(lambda: driver.find_elements(By.CSS_SELECTOR, "[role=slider]"), 30, "the joint sliders")
         assert len(sliders) == robot.n
         # As a user does, with the keyboard on each slider thumb (Home/End: to a limit; an arrow: one step of
-        # 0.1 deg or 1 mm): shoulder 179.6 deg, elbow -179.5 deg (folded back: near a singularity), quill 3495 mm.
-        for slider, keys in ((sliders[0], Keys.END + Keys.ARROW_LEFT * 3), (sliders[1], Keys.HOME + Keys.ARROW_RIGHT * 4),
-                             (sliders[2], Keys.END + Keys.ARROW_LEFT * 5)):
+        # 0.1 deg or 1 mm): shoulder 179.8 deg, elbow -179.8 deg (folded back: near a singularity), quill 3500 mm.
+        # Few keys: each is a render of the 3-D view in software, seconds on a loaded machine.
+        for slider, keys in ((sliders[0], Keys.END + Keys.ARROW_LEFT), (sliders[1], Keys.HOME + Keys.ARROW_RIGHT),
+                             (sliders[2], Keys.END)):
             slider.send_keys(keys)
         values = lambda: [float(s.get_attribute("aria-valuenow")) for s in sliders]  # noqa: E731
-        _wait(lambda: bool(np.allclose(values(), [179.6, -179.5, 3495.0, 0.0], atol=1e-9)), 30, "the sliders to move")
+        _wait(lambda: bool(np.allclose(values(), [179.8, -179.8, 3500.0, 0.0], atol=1e-9)), 60, "the sliders to move")
         q = np.radians(values())
         q[2] = values()[2] / 1000.0
         pos_mm = robot.fkine(q)[:3, 3] * 1000.0
@@ -137,15 +138,16 @@ def test_slider_moves_the_pose_the_page_shows_equals_fkine(tmp_path):
             p = _shown_pose(driver)
             return p if p is not None and np.abs(p[:3] - pos_mm).max() <= 0.005 + 1e-9 else None
 
-        shown = _wait(matches, 30, f"the page to show the position {pos_mm}")
+        shown = _wait(matches, 60, f"the page to show the position {pos_mm}")
         R_shown = rpy_matrix(np.radians(shown[3:]))
         R_model = robot.fkine(q)[:3, :3]
         # Rotation from angles rounded to 0.01 deg: each entry within 3 x (0.005 deg in rad) of the model's.
         assert np.abs(R_shown - R_model).max() <= 3 * np.radians(0.005)
         # Negative control: fkine of the slider values before the move is far from what is shown.
         assert np.abs(robot.fkine(robot.q_rest)[:3, 3] * 1000.0 - shown[:3]).max() > 1000.0
-        # |sin(-179.5 deg)| = 0.009 < 0.05: the page names the singularity
-        assert "near a singularity" in driver.page_source and "elbow folded" in driver.page_source
+        # |sin(-179.8 deg)| = 0.0035 < 0.05: the page names the singularity
+        mark = driver.find_elements(By.XPATH, "//*[contains(text(), 'near a singularity')]/..")
+        assert mark and "elbow folded (theta2 = pi)" in mark[0].text
         _assert_loopback_only(proc.pid, port)  # the browser's websocket included
         shot = tmp_path / "teach.png"
         driver.save_screenshot(str(shot))
@@ -164,7 +166,7 @@ def _assert_not_blank(png: Path) -> None:
     from matplotlib.image import imread
 
     img = imread(png)[..., :3]
-    assert img.shape[0] >= 600 and img.shape[1] >= 1000
+    assert img.shape[0] >= 500 and img.shape[1] >= 1000
     scene = img[:, : img.shape[1] * 2 // 3]  # the 3-D view, left of the control panel
     colours = np.unique((scene.reshape(-1, 3) * 255).astype(np.uint8), axis=0)
     # a drawn arm, grid and frames give hundreds of colours; a blank or one-colour page a handful
