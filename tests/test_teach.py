@@ -4,7 +4,8 @@ A real viser server is started on 127.0.0.1 and a free port for each page (no
 client connects); the page's state is driven through its Python methods and
 the numbers it would show are compared with the model's own ``fkine`` and IK
 and with an independent construction of roll-pitch-yaw. Cost: ~6 s (a server
-start is ~0.3 s; the panda's and ur5's kinematics take the rest).
+start is ~0.3 s; the panda's and ur5's kinematics take the rest), plus one
+``manip track`` of the planar2r (its dynamics compiled: ~15 s idle, 33 s under load).
 """
 
 from __future__ import annotations
@@ -208,3 +209,22 @@ def test_format_pose_rounds_to_its_digits():
     r = readout(robot, [0.3, 0.4])
     text = format_pose(r, DisplayUnits())
     assert f"{r.T[0, 3] * 1000:.2f}" in text and f"{np.degrees(r.rpy[2]):.2f}" in text
+
+
+def test_track_saves_the_run_the_page_plays(tmp_path):
+    """``manip track --out DIR`` writes DIR/tracking.npz; ``load_replay`` reads back its t and q (the teach button)."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    out = tmp_path / "track"
+    res = subprocess.run([sys.executable, "-m", "workbench.cli", "track", "planar2r", "--controller", "pd",
+                          "--task", "tour", "--segment-time", "0.3", "--out", str(out)],
+                         cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    replay = load_replay(out, "planar2r", 2)
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert replay.duration == pytest.approx(metrics["duration_s"], abs=1e-12)
+    assert replay.q.shape == (replay.t.size, 2) and np.all(np.isfinite(replay.q))
+    assert np.allclose(replay.at(replay.duration), replay.q[-1])
