@@ -197,6 +197,12 @@ def test_busy_port_and_unloadable_robot_are_one_line_errors(tmp_path):
     assert res.returncode == 2
     assert res.stderr.strip() == (f"manip teach: error: --port: {port} on 127.0.0.1 is in use; "
                                   "choose another or leave --port out for a free one")
+    # binding off loopback is explicit and warned about (192.0.2.1, TEST-NET-1, is on no interface: refused too)
+    res = _manip("teach", "scara", "--host", "192.0.2.1", "--no-browser")
+    assert res.returncode == 2
+    assert res.stderr.splitlines() == [
+        "manip: warning: --host 192.0.2.1: the teach page (no authentication) is reachable from other machines",
+        "manip teach: error: --host 192.0.2.1 --port 0: cannot bind (Cannot assign requested address)"]
     res = _manip("teach", str(tmp_path / "missing.toml"), "--no-browser")
     assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
     assert "missing.toml" in res.stderr

@@ -266,6 +266,9 @@ class TeachPage:
         self.limits = finite_limits(robot.description)
         self.q = np.clip(robot.q_rest, self.limits[0], self.limits[1]).astype(float)
         self._lock = threading.RLock()
+        self._pending_lock = threading.Lock()
+        self._solving = False
+        self._pending = False
         self._play_stop = threading.Event()
         self._player: threading.Thread | None = None
         self._replays = dict(replays or {})
@@ -412,13 +415,30 @@ class TeachPage:
         return T
 
     def _solve_target(self) -> None:
-        T = self.target_pose()
+        """Solve for the target's latest pose; drags that arrive meanwhile are folded into one more solve."""
         self.stop_playback()
-        with self._lock:
-            if self.closed_form:
-                self._solve_closed_form(T)
-            else:
-                self._solve_numeric(T)
+        with self._pending_lock:
+            if self._solving:
+                self._pending = True
+                return
+            self._solving = True
+        try:
+            while True:
+                self._pending = False
+                T = self.target_pose()
+                with self._lock:
+                    if self.closed_form:
+                        self._solve_closed_form(T)
+                    else:
+                        self._solve_numeric(T)
+                with self._pending_lock:
+                    if not self._pending:
+                        self._solving = False
+                        return
+        except BaseException:
+            with self._pending_lock:
+                self._solving = False
+            raise
 
     def _solve_closed_form(self, T: np.ndarray) -> None:
         try:
