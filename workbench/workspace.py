@@ -52,6 +52,7 @@ def _section(ax, sec: "Section", title: str, seed: int) -> None:
 def workspace_figure(ws: "ReachableWorkspace", robot: "Robot") -> "Figure":
     """The workspace in three panels: 3-D samples with the arm at rest, top view x-y, side view r-z."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 
     fig = Figure(figsize=(13.5, 4.6), layout="constrained")
     ax3 = fig.add_subplot(1, 3, 1, projection="3d")
@@ -62,10 +63,15 @@ def workspace_figure(ws: "ReachableWorkspace", robot: "Robot") -> "Figure":
     ax3.plot(origins[:, 0], origins[:, 1], origins[:, 2], "-o", color="k", lw=2.5, ms=3.5, label="arm at rest")
     ax3.set_xlabel("x [m]")
     ax3.set_ylabel("y [m]", labelpad=8)
-    ax3.set_zlabel("z [m]", labelpad=10)
+    ax3.zaxis.set_major_locator(MaxNLocator(4))  # z label left out: constrained layout would put it on the next panel
     lo, hi = ws.points.min(axis=0), ws.points.max(axis=0)
-    ax3.set_box_aspect(np.maximum(hi - lo, 0.05 * float(max(hi - lo))))
-    ax3.set_title(f"{ws.robot}: {ws.points.shape[0]} samples of q within the limits", fontsize=10)
+    span = float(max(hi - lo))
+    if hi[2] - lo[2] < 0.05 * span:  # a planar arm: give the flat cloud a visible height, not overlapping ticks
+        zc = 0.5 * (hi[2] + lo[2])
+        ax3.set_zlim(zc - 0.1 * span, zc + 0.1 * span)
+        lo[2], hi[2] = zc - 0.1 * span, zc + 0.1 * span
+    ax3.set_box_aspect(np.maximum(hi - lo, 0.05 * span))
+    ax3.set_title(f"{ws.robot}: {ws.points.shape[0]} samples of q within the limits\n(x, y, z in m)", fontsize=10)
     ax3.legend(loc="upper left", fontsize=7)
     _section(fig.add_subplot(1, 3, 2), ws.top, "top view x-y (all heights)", ws.seed)
     side = "meridian section r-z" if ws.axisymmetric else "side view r-z (projection)"
