@@ -501,7 +501,8 @@ class TeachPage:
     def stop(self) -> None:
         """Stop the playback and the server: nothing listens afterwards."""
         self.stop_playback()
-        self.server.stop()
+        with contextlib.redirect_stdout(io.StringIO()):  # viser's "Server stopped" line; the command prints its own
+            self.server.stop()
 
 
 def _no_share_tunnel(server: "viser.ViserServer") -> None:
