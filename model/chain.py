@@ -45,7 +45,7 @@ import numpy as np
 
 from .description import RobotDescription, RobotDescriptionError, pose_matrix
 
-__all__ = ["Chain", "build_chain", "dh_standard", "dh_modified"]
+__all__ = ["Chain", "build_chain", "dh_standard", "dh_modified", "joint_axes"]
 
 
 def _rx(a: float) -> np.ndarray:
@@ -188,3 +188,18 @@ def build_chain(desc: RobotDescription) -> Chain:
         tip=_clean(tip),
         tool=desc.T_tool,
     )
+
+
+def joint_axes(chain: Chain, T_links: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """World origin (m) and unit axis of every joint, from the reported link frames ``T_links`` (n+1, 4, 4).
+
+    ``T_links`` is ``fkine_all(q)`` (frame 0, then the reported frame of each link). Joint i
+    sits in body i-1 at ``P_i``: its frame is ``T_W,body(i-1) P_i`` with
+    ``T_W,body(i-1) = T_links[i-1] F_(i-1)^-1`` (body 0 is frame 0).
+    """
+    out = []
+    for i in range(chain.n):
+        body = T_links[0] if i == 0 else T_links[i] @ np.linalg.inv(chain.reported[i - 1])
+        J = body @ chain.placements[i]
+        out.append((J[:3, 3].copy(), J[:3, :3] @ chain.axes[i]))
+    return out

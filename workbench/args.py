@@ -13,7 +13,7 @@ import math
 
 from model.errors import InputError
 
-__all__ = ["UsageError", "add_spec_args", "controller_kind", "finite_or_fail", "positive_float"]
+__all__ = ["UsageError", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail", "positive_float"]
 
 class UsageError(InputError):
     """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
@@ -48,6 +48,21 @@ def positive_float(text: str) -> float:
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"expected a positive finite step in s, got {text!r}")
     return value
+
+
+def bounded_int(lo: int, hi: int, what: str):
+    """argparse type: a whole number from ``lo`` to ``hi`` (``what`` names it in the message, e.g. "a port number")."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"expected {what} {lo}..{hi}, got {text!r}")
+        return value
+
+    return parse
 
 
 def add_spec_args(p: argparse.ArgumentParser) -> None:

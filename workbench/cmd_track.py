@@ -3,7 +3,8 @@
 ``manip track ROBOT --controller KIND [--task pick-and-place | --waypoints FILE] [--segment-time S] [--rate HZ]
 [--payload KG] --out DIR`` simulates the closed loop on the nonlinear model and
 writes ``DIR/metrics.json`` and ``DIR/tracking_error.png``, ``DIR/torques.png``,
-``DIR/joints.png``; progress goes to stderr. With a plant/model mismatch
+``DIR/joints.png``, and ``DIR/tracking.npz`` (t, q, q_ref: the run that
+``manip teach ROBOT --result DIR`` plays); progress goes to stderr. With a plant/model mismatch
 (``--payload``, ``--friction-scale``, ``--mass-scale``) the same controller also
 runs on the exact plant and ``metrics.json`` reports both and their ratio.
 ``--out`` is checked before the simulation starts.
@@ -19,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from .args import add_spec_args, controller_kind, finite_or_fail
 from .outputs import check_out_dir, out_dir, save_figure, write_json
+from .replay import REPLAY_FILE, save_replay
 
 if TYPE_CHECKING:
     from closed_loop.result import TrackingResult
@@ -79,6 +81,7 @@ def run_track(args: argparse.Namespace) -> int:
                                "peak_motor_torque": nominal.peak_motor_torque.tolist()}
         data["max_error_ratio"] = [float(a / b) if b > 0 else None for a, b in zip(met.max_error, nominal.max_error)]
     write_json(out / "metrics.json", data)
+    save_replay(result, out / REPLAY_FILE)  # for `manip teach ROBOT --result DIR`
     save_tracking_plots(result, out)
     print(f"{robot.name}: {kind} at {args.rate:g} Hz, {mismatch.describe()}, {result.t[-1] - result.t[0]:g} s "
           f"simulated in {met.wall_time:.2f} s")
@@ -89,7 +92,7 @@ def run_track(args: argparse.Namespace) -> int:
     if "max_error_ratio" in data:
         ratios = ", ".join("-" if r is None else f"{r:.3g}" for r in data["max_error_ratio"])
         print(f"max error / max error on the exact plant: {ratios}")
-    print(f"wrote {out / 'metrics.json'} and 3 PNG files")
+    print(f"wrote {out / 'metrics.json'}, {out / REPLAY_FILE} (for manip teach --result) and 3 PNG files")
     return 0
 
 

@@ -32,6 +32,7 @@ from .cmd_track import save_tracking_plots
 from .formatting import format_build, format_info
 from .outputs import write_json
 from .report import Report
+from .workspace import add_workspace_section  # wt-teach
 
 __all__ = ["DemoResult", "run_demo", "Progress"]
 
@@ -143,6 +144,10 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     units = ["rad" if lk.is_revolute else "m" for lk in robot.description.links]
     report.table(["t [s]"] + [f"q{j + 1} [{u}]" for j, u in enumerate(units)],
                  [[t, *q] for t, q in zip(trajectory.t_via, trajectory.q_via)])
+
+    # --- workspace section (wt-teach): self-contained, see workbench/workspace.py ---
+    progress.note("sampling the reachable workspace of the tool point")
+    files += add_workspace_section(report, robot, out)
 
     progress.step("designing the joint loops (decentralised PD and computed torque)")
     report.heading("Control design")
