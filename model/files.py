@@ -4,13 +4,18 @@ A writer produces its output under a temporary name in the destination's
 folder (``.NAME.<random>.tmp.SUFFIX``) and renames it over the destination with
 :func:`os.replace`, which is atomic on one file system. An interrupted or
 failed write leaves the destination untouched and removes the temporary file.
+The file gets the permissions a plain ``open(path, "w")`` would give it: those
+of the file it replaces, or ``0o666`` less the process's umask for a new one
+(:func:`tempfile.mkstemp` alone would leave it readable by its owner only).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
+import threading
 from pathlib import Path
 from typing import Iterator
 
@@ -18,6 +23,19 @@ __all__ = ["TEMP_SUFFIX", "atomic_path", "write_atomic"]
 
 #: Mark in the names of the temporary files (``.NAME.<random>.tmp.SUFFIX``): none is left behind after a write.
 TEMP_SUFFIX = ".tmp"
+
+_UMASK_LOCK = threading.Lock()
+
+
+def _plain_mode(path: Path) -> int:
+    """Permission bits ``open(path, "w")`` would leave: the existing file's, else 0o666 less the umask."""
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        with _UMASK_LOCK:  # os.umask can only be read by setting it
+            umask = os.umask(0o022)
+            os.umask(umask)
+        return 0o666 & ~umask
 
 
 @contextlib.contextmanager
@@ -32,6 +50,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, _plain_mode(path))
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
