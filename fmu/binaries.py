@@ -85,9 +85,11 @@ def check_binary(path: str | Path, target: Platform, tool: str, *, prefix: str =
         if target.object_format == "macho":
             arch = _MACHO_ARCH[target.machine]
             archs = re.findall(r"cputype CPU_TYPE_(\w+)", _run(tool, "--macho", "--universal-headers", path))
+            if not archs:  # a thin file: the machine of its one header
+                archs = re.findall(r"^MH_MAGIC_64\s+(\w+)", _run(tool, "--macho", "--private-header", path), re.M)
             wanted = {"x86_64": "X86_64", "arm64": "ARM64"}[arch]
             if wanted not in archs:
-                result.problems.append(f"no {arch} slice (slices: {archs or 'none, a thin file'})")
+                result.problems.append(f"no {arch} slice (has: {archs or 'none'})")
                 return result
             trie = _run(tool, "--macho", "--exports-trie", f"--arch={arch}", path)
             result.exports = re.findall(r"^0x[0-9A-Fa-f]+\s+(\S+)", trie, re.M)
