@@ -95,7 +95,8 @@ def _run(name: str, folder: Path, mode: str, count: int, tmp_path: Path) -> subp
         if wine is None:
             pytest.skip("wine is not installed (tools/system-packages installs it)")
         prefix = [wine]
-        env.update(WINEDEBUG="-all", WINEPREFIX=str(tmp_path / "wineprefix"))
+        # one prefix for the session: wine's first start in a new prefix costs about 10 s here
+        env.update(WINEDEBUG="-all", WINEPREFIX=str(build_root() / "cross" / "wineprefix"))
     elif target.runner == "qemu-aarch64":
         qemu = shutil.which("qemu-aarch64")
         if qemu is None or not (SYSROOT / "lib" / "ld-linux-aarch64.so.1").is_file():
