@@ -147,7 +147,8 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     """
     from model import Robot, load_robot
 
-    binary_platform()  # refuse other platforms before the symbolic work
+    binary_platform()  # refuse other hosts, and platforms without a compiler, before the symbolic work
+    _targets(platforms)
     if isinstance(robot_or_name, Robot):
         robot = robot_or_name
         if robot.motor_model != motor_model:
@@ -180,9 +181,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, platforms: Seque
     path = Path(path)
     if path.suffix != ".fmu":
         raise InputError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
-    binary_platform()  # refuse other hosts before any work
-    host = host_platform()
-    targets = [host, *[p for p in (platforms or ()) if p != host]]
+    targets = _targets(platforms)
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_") as tmp:
         root = Path(tmp) / "fmu"
@@ -283,6 +282,19 @@ def _run(cmd: list[str], what: str) -> None:
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise FmuBuildError(f"{what} failed (exit {proc.returncode}):\n$ {' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+
+
+def _targets(platforms: Sequence[Platform] | None) -> list[Platform]:
+    """The host's platform, then the others of ``platforms``; FmuBuildError on another host or a missing compiler."""
+    binary_platform()
+    host = host_platform()
+    targets = [host, *[p for p in (platforms or ()) if p != host]]
+    try:
+        for target in targets:
+            compiler_for(target)
+    except CrossCompileError as exc:
+        raise FmuBuildError(str(exc)) from None
+    return targets
 
 
 def _compile(targets: Sequence[Platform], sources: Path, c_files: list[str], root: Path, identifier: str,

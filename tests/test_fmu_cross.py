@@ -37,7 +37,7 @@ import pytest
 
 from fmu.binaries import carried_platforms, check_binary, objdump
 from fmu.build import build_driver
-from fmu.platforms import PLATFORMS, platform_folder
+from fmu.platforms import PLATFORMS, host_platform, platform_folder
 
 from fmu_support import build_root
 
@@ -240,3 +240,43 @@ def test_an_unknown_platform_is_one_line_naming_the_flag_and_value(tmp_path):
     assert len(lines) == 1 and "--platforms" in lines[0] and "'win32'" in lines[0]
     assert "linux64" in lines[0] and "aarch64-linux" in lines[0]
     assert not out.exists() and not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("name", ["x86_64-windows", "aarch64-darwin", "aarch64-linux"])
+def test_compile_shared_builds_any_sources_and_the_check_sees_an_extra_export(cross_export, name, tmp_path):
+    """fmu.cross.compile_shared on other sources (as an FMI 3.0 build calls it); negative control: a helper
+    exported next to an FMI function is reported, a hidden one is not."""
+    from fmu.cross import compile_shared
+
+    source = tmp_path / "extra.c"
+    source.write_text("#if defined(_WIN32)\n#define EXPORT __declspec(dllexport)\n#else\n"
+                      "#define EXPORT __attribute__((visibility(\"default\")))\n#endif\n"
+                      "EXPORT const char *fmi2GetVersion(void) { return \"2.0\"; }\n"
+                      "EXPORT int helper(void) { return 1; }\n"
+                      "int hidden(void) { return 2; }\n")
+    target = BY_NAME[name]
+    binary = compile_shared(target, [source], tmp_path / "out" / f"extra{target.suffix}", work=tmp_path / "work")
+    assert binary.is_file() and not (tmp_path / "out" / "obj-" f"{name}").exists()
+    found = check_binary(binary, target, objdump())
+    assert sorted(found.exports) == ["fmi2GetVersion", "helper"]
+    assert found.problems == ["exports non-FMI symbols: ['helper']"]
+
+
+def test_without_zig_the_default_is_the_hosts_binary_and_one_line_says_why(tmp_path, monkeypatch, capsys):
+    import fmu.cross
+    from workbench.cli import main
+
+    monkeypatch.setattr(fmu.cross, "zig_command", lambda: None)
+    out = tmp_path / "planar2r.fmu"
+    assert main(["export-fmu", "planar2r", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    host = host_platform().name
+    assert (f"--platforms: only the host's binary ({host}): the cross compiler is missing "
+            "(pip install 'manipulator-workbench[cross]' installs ziglang)") in err
+    assert list(carried_platforms(out)) == [host]
+    # asked for by name, a platform without its compiler is refused in one line before any work
+    assert main(["export-fmu", "planar2r", "-o", str(tmp_path / "w.fmu"), "--platforms", "win64"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == ["manip export-fmu: error: x86_64-windows: cross-compiling needs the ziglang package "
+                     "(pip install 'manipulator-workbench[cross]')"]
+    assert not (tmp_path / "w.fmu").exists()

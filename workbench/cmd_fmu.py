@@ -30,17 +30,17 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from fmu.cross import buildable_platforms
     from fmu.platforms import resolve_platforms
 
-    if args.platforms is None:  # everything the toolchain builds; the host's alone says why
-        platforms, why = buildable_platforms()
-        if why:
-            _say(f"--platforms: {why}")
+    why = ""
+    if args.platforms is None:  # everything the toolchain builds; the host's alone says why (after the work,
+        platforms, why = buildable_platforms()  # so that a bad input still gives one line)
     else:
         platforms = resolve_platforms(args.platforms, flag="--platforms")
     out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
-    _say("platforms: " + ", ".join(p.name for p in platforms))
     path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, platforms=platforms,
                       progress=_say)
-    print(f"wrote {path}")
+    if why:
+        _say(f"--platforms: {why}")
+    print(f"wrote {path} ({', '.join(p.name for p in platforms)})")
     return 0
 
 
