@@ -56,7 +56,7 @@ class Platform:
     object_format, machine
         What a structural check expects: ``elf``/``pe``/``macho`` and ``x86_64``/``aarch64``.
     runner
-        How this machine runs the platform's test driver: ``"native"``, ``"wine"``,
+        How an x86_64 Linux machine runs the platform's test driver: ``"native"``, ``"wine"``,
         ``"qemu-aarch64"`` or ``""`` (no way: checked structurally only).
     runtime
         The C runtime the binary may need, for a person.
