@@ -147,8 +147,7 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     """
     from model import Robot, load_robot
 
-    binary_platform()  # refuse other hosts, and platforms without a compiler, before the symbolic work
-    _targets(platforms)
+    _targets(platforms)  # refuse other hosts, and platforms without a compiler, before the symbolic work
     if isinstance(robot_or_name, Robot):
         robot = robot_or_name
         if robot.motor_model != motor_model:
