@@ -242,18 +242,24 @@ def test_an_unknown_platform_is_one_line_naming_the_flag_and_value(tmp_path):
     assert not out.exists() and not any(tmp_path.iterdir())
 
 
+def _extra_source(folder: Path) -> Path:
+    """A C file exporting one FMI function and one helper, with a third function left hidden."""
+    source = folder / "extra.c"
+    source.write_text("#if defined(_WIN32)\n#define EXPORT __declspec(dllexport)\n#else\n"
+                      "#define EXPORT __attribute__((visibility(\"default\")))\n#endif\n"
+                      "EXPORT const char *fmi2GetVersion(void) { return \"2.0\"; }\n"
+                      "EXPORT int helper(void) { return 1; }\n"
+                      "int hidden(void) { return 2; }\n")
+    return source
+
+
 @pytest.mark.parametrize("name", ["x86_64-windows", "aarch64-darwin", "aarch64-linux"])
 def test_compile_shared_builds_any_sources_and_the_check_sees_an_extra_export(cross_export, name, tmp_path):
     """fmu.cross.compile_shared on other sources (as an FMI 3.0 build calls it); negative control: a helper
     exported next to an FMI function is reported, a hidden one is not."""
     from fmu.cross import compile_shared
 
-    source = tmp_path / "extra.c"
-    source.write_text("#if defined(_WIN32)\n#define EXPORT __declspec(dllexport)\n#else\n"
-                      "#define EXPORT __attribute__((visibility(\"default\")))\n#endif\n"
-                      "EXPORT const char *fmi2GetVersion(void) { return \"2.0\"; }\n"
-                      "EXPORT int helper(void) { return 1; }\n"
-                      "int hidden(void) { return 2; }\n")
+    source = _extra_source(tmp_path)
     target = BY_NAME[name]
     binary = compile_shared(target, [source], tmp_path / "out" / f"extra{target.suffix}", work=tmp_path / "work")
     assert binary.is_file() and not (tmp_path / "out" / "obj-" f"{name}").exists()
@@ -280,3 +286,33 @@ def test_without_zig_the_default_is_the_hosts_binary_and_one_line_says_why(tmp_p
     assert lines == ["manip export-fmu: error: x86_64-windows: cross-compiling needs the ziglang package "
                      "(pip install 'manipulator-workbench[cross]')"]
     assert not (tmp_path / "w.fmu").exists()
+
+
+def test_place_binaries_uses_each_fmi_versions_folders(cross_export, tmp_path):
+    """FMI 2.0: both Macs in one universal darwin64 binary; FMI 3.0: one thin binary per platform tuple."""
+    from fmu.cross import place_binaries
+
+    source = _extra_source(tmp_path)
+    macs = [BY_NAME["x86_64-darwin"], BY_NAME["aarch64-darwin"]]
+    two = place_binaries(macs, [source], tmp_path / "fmi2", "extra", fmi_version=2, work=tmp_path / "w2")
+    three = place_binaries(macs, [source], tmp_path / "fmi3", "extra", fmi_version=3, work=tmp_path / "w3")
+    assert two == {m.name: tmp_path / "fmi2/binaries/darwin64/extra.dylib" for m in macs}
+    assert three == {m.name: tmp_path / f"fmi3/binaries/{m.name}/extra.dylib" for m in macs}
+    assert sorted(p.relative_to(tmp_path).as_posix() for p in (tmp_path / "fmi3").rglob("*") if p.is_file()) == [
+        "fmi3/binaries/aarch64-darwin/extra.dylib", "fmi3/binaries/x86_64-darwin/extra.dylib"]
+    headers = subprocess.run([objdump(), "--macho", "--universal-headers", str(two["x86_64-darwin"])],
+                             capture_output=True, text=True, check=True).stdout
+    assert "nfat_arch 2" in headers
+    for mac in macs:
+        assert check_binary(three[mac.name], mac, objdump()).exports == ["fmi2GetVersion", "helper"]
+        assert "no " in check_binary(three[mac.name], macs[1 - macs.index(mac)], objdump()).problems[0]
+
+
+def test_the_validation_report_prints_the_platforms(cross_export):
+    from fmu.validate import ValidationReport, binary_problems
+
+    fmu_path, _, _ = cross_export
+    text = ValidationReport(str(fmu_path), [], *binary_problems(fmu_path)).format()
+    assert ("  platforms: x86_64-linux, x86_64-windows, x86_64-darwin, aarch64-darwin, aarch64-linux (this machine's "
+            "loaded and run; others checked with llvm-objdump: x86_64-windows, x86_64-darwin, aarch64-darwin, "
+            "aarch64-linux)") in text
