@@ -2,7 +2,8 @@
 
 The check reads the binary, it does not load it, so it covers platforms this
 machine cannot run (macOS): object format and machine (every slice of a
-universal Mach-O), exported symbols (the FMI functions and nothing else, bar
+universal Mach-O; the arm64 one must carry a code signature, zig's ad-hoc one),
+exported symbols (the FMI functions and nothing else, bar
 the two symbols every Mach-O dylib exports) and imported libraries (the
 platform's C runtime only).
 """
@@ -91,6 +92,9 @@ def check_binary(path: str | Path, target: Platform, tool: str, *, prefix: str =
             if wanted not in archs:
                 result.problems.append(f"no {arch} slice (has: {archs or 'none'})")
                 return result
+            if arch == "arm64" and "LC_CODE_SIGNATURE" not in _run(tool, "--macho", "--private-headers",
+                                                                  f"--arch={arch}", path):
+                result.problems.append("the arm64 slice has no code signature (Apple silicon loads signed code only)")
             trie = _run(tool, "--macho", "--exports-trie", f"--arch={arch}", path)
             result.exports = re.findall(r"^0x[0-9A-Fa-f]+\s+(\S+)", trie, re.M)
             dylibs = _run(tool, "--macho", "--dylibs-used", f"--arch={arch}", path).splitlines()[1:]
