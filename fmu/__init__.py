@@ -1,7 +1,8 @@
 """FMU export: the robot as a native FMI 2.0 FMU (Model Exchange and Co-Simulation).
 
 Data flow: :mod:`fmu.variables` (the one variable table) -> :mod:`fmu.build`
-(CasADi C, the wrapper of ``fmu/c/``, gcc, zip) -> :mod:`fmu.simulate` (FMPy)
+(CasADi C, the wrapper of ``fmu/c/``, gcc and for other platforms
+:mod:`fmu.cross` with the table of :mod:`fmu.platforms`, zip) -> :mod:`fmu.simulate` (FMPy)
 and :mod:`fmu.cosim` (libcosim) -> :mod:`fmu.validate` (all of it checked
 against the Python model). It exports and validates any model spec and knows
 nothing of controllers: closed loops through FMUs are :mod:`closed_loop`.
@@ -9,6 +10,8 @@ nothing of controllers: closed loops through FMUs are :mod:`closed_loop`.
 
 from .archive import FmuArchiveError, check_fmu_archive
 from .build import FmuBuildError, build_driver, build_fmu, export_fmu, export_trivial_fmu, tool_version
+from .cross import compile_shared
+from .platforms import PLATFORMS, Platform, platform_folder, resolve_platforms
 from .cosim import CosimError, CosimResult, run_libcosim
 from .simulate import SimulationResult, simulate_cs, simulate_me, step_input
 from .validate import ValidationReport, validate_fmu
@@ -17,6 +20,11 @@ from .export_checks import SingularInertiaError, check_inertia
 from .reference import StickSlipResult, simulate_stick_slip
 
 __all__ = [
+    "PLATFORMS",
+    "Platform",
+    "compile_shared",
+    "platform_folder",
+    "resolve_platforms",
     "SingularInertiaError",
     "StickSlipResult",
     "check_inertia",

@@ -14,9 +14,11 @@ The FMU is made of
 
 Generation, compiler discovery and flags are those of :mod:`model.codegen`
 (the one CasADi -> C -> compiler pipeline), plus hidden visibility, so the
-binary exports the ``fmi2`` functions only and needs nothing but libc and libm;
+binary exports the ``fmi2`` functions only and needs nothing but the C runtime;
 the units are compiled in parallel. No floating-point contraction
 (``-ffp-contract=off``: no fused multiply-add), so gcc and clang give the same numbers.
+Binaries for other platforms (Windows, macOS, Linux on aarch64) are
+cross-compiled by :mod:`fmu.cross` into the folders of :mod:`fmu.platforms`.
 """
 
 from __future__ import annotations
@@ -24,21 +26,22 @@ from __future__ import annotations
 import hashlib
 import importlib.metadata
 import os
-import platform
 import shutil
 import subprocess
 import tempfile
 import uuid
 import zipfile
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import casadi as ca
 
-from model.codegen import CompilerNotFoundError, compile_flags, compile_objects, find_compiler, generate_c
+from model.codegen import generate_c
 from model.errors import InputError, ToolchainError
 from model.files import atomic_path
 
+from .cross import CASADI_CFLAGS, CFLAGS, CrossCompileError, compiler_for, place_binaries
+from .platforms import Platform, UnsupportedHostError, host_platform
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
 __all__ = [
@@ -60,12 +63,6 @@ C_DIR = Path(__file__).resolve().parent / "c"
 WRAPPER_SOURCES = ("fmi2_functions.c", "instance.c")
 WRAPPER_HEADERS = ("model.h", "instance.h")
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-
-# model.codegen's policy (strict warnings, -ffp-contract=off) at -O2, with hidden symbols. CasADi's
-# generated functions leave some of their (arg, res, iw, w, mem) parameters unused: that one warning
-# is relaxed for the generated file only.
-CFLAGS = compile_flags(generated=False, optimisation="-O2") + ("-fvisibility=hidden",)
-CASADI_CFLAGS = compile_flags(generated=True, optimisation="-O2") + ("-fvisibility=hidden",)
 
 STAMP = "generated, do not edit"
 
@@ -94,18 +91,15 @@ def fmi_headers_dir() -> Path:
 
 
 def binary_platform() -> str:
-    """The FMI 2.0 platform folder of this machine (``linux64``).
+    """The FMI 2.0 platform folder of this machine (``linux64``, or ``aarch64-linux`` on ARM).
 
-    The build (GNU ld flags, a ``.so``) is Linux only: elsewhere this raises
-    :class:`FmuBuildError`, before any work is done.
+    The export runs on Linux only: elsewhere this raises :class:`FmuBuildError`,
+    before any work is done.
     """
-    system = platform.system()
-    if system != "Linux":
-        raise FmuBuildError(
-            f"FMU export is supported on Linux (linux64) only; got {system or 'an unknown system'}. "
-            "An FMU exported on Linux carries its C code in sources/, from which importers rebuild "
-            "the binary on other platforms (e.g. FMPy's 'Compile platform binary')")
-    return "linux" + ("64" if platform.architecture()[0] == "64bit" else "32")
+    try:
+        return host_platform().fmi2_folder
+    except UnsupportedHostError as exc:
+        raise FmuBuildError(str(exc)) from None
 
 
 def _say(progress: Progress | None, message: str) -> None:
@@ -116,7 +110,8 @@ def _say(progress: Progress | None, message: str) -> None:
 # ------------------------------------------------------------------ public API
 
 def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float = 1e-3,
-               motor_model: str = "reflected", progress: Progress | None = None) -> Path:
+               motor_model: str = "reflected", platforms: Sequence[Platform] | None = None,
+               progress: Progress | None = None) -> Path:
     """Export a robot as an FMI 2.0 FMU for Model Exchange and Co-Simulation.
 
     Parameters
@@ -130,8 +125,12 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
         fixed parameter ``internal_step`` and its default experiment step.
     motor_model
         ``"reflected"`` or ``"full"`` (see :class:`model.Robot`).
+    platforms
+        Rows of :data:`fmu.platforms.PLATFORMS` to build binaries for (the host's
+        is always built); default the host's only. Cross platforms need the
+        ``ziglang`` package (:func:`fmu.cross.buildable_platforms`).
     progress
-        Called with one line per build stage (the CLI passes ``print``).
+        Called with one line per build stage and platform (the CLI prints them on stderr).
 
     Returns
     -------
@@ -144,11 +143,11 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
         Bad step or motor model, unknown robot; :class:`fmu.export_checks.SingularInertiaError`
         (a ``RobotDescriptionError``) when ``B(q)`` is singular, naming the joint.
     FmuBuildError
-        Not on Linux, or the generated C did not compile.
+        Not on Linux, no cross compiler for a platform asked for, or the generated C did not compile.
     """
     from model import Robot, load_robot
 
-    binary_platform()  # refuse other platforms before the symbolic work
+    _targets(platforms)  # refuse other hosts, and platforms without a compiler, before the symbolic work
     if isinstance(robot_or_name, Robot):
         robot = robot_or_name
         if robot.motor_model != motor_model:
@@ -166,7 +165,7 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
 
     plant = build_plant(robot)
     spec = spec_from_plant(plant, robot, step, robot_digest=digest, robot_json=description_to_json(robot.description))
-    return build_fmu(spec, path, progress=progress)
+    return build_fmu(spec, path, platforms=platforms, progress=progress)
 
 
 def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_inputs: int = 1,
@@ -175,21 +174,21 @@ def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_in
     return build_fmu(trivial_spec(step, n_inputs), path, progress=progress)
 
 
-def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, progress: Progress | None = None) -> Path:
-    """Generate, compile and zip the FMU of ``spec`` into ``path``."""
+def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, platforms: Sequence[Platform] | None = None,
+              progress: Progress | None = None) -> Path:
+    """Generate, compile (for the host and ``platforms``) and zip the FMU of ``spec`` into ``path``."""
     path = Path(path)
     if path.suffix != ".fmu":
         raise InputError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
-    platform_dir = binary_platform()
+    targets = _targets(platforms)
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_") as tmp:
         root = Path(tmp) / "fmu"
         sources = root / "sources"
         sources.mkdir(parents=True)
         table, guid, c_files = generate_sources(spec, sources, progress=progress)
-        _say(progress, f"compiling with {_compiler()} " + " ".join(CFLAGS))
-        binary = root / "binaries" / platform_dir / f"{spec.model_identifier}.so"
-        _compile(sources, c_files, binary, Path(tmp) / "obj")
+        _say(progress, "compile flags: " + " ".join(CFLAGS))
+        _compile(targets, sources, c_files, root, spec.model_identifier, Path(tmp) / "work", progress)
         (root / "modelDescription.xml").write_text(table.model_description(guid, c_files, tool_version()))
         if spec.robot_json:
             from .robot_resource import ROBOT_RESOURCE
@@ -284,31 +283,45 @@ def _run(cmd: list[str], what: str) -> None:
         raise FmuBuildError(f"{what} failed (exit {proc.returncode}):\n$ {' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
 
 
-def _compiler() -> str:
+def _targets(platforms: Sequence[Platform] | None) -> list[Platform]:
+    """The host's platform, then the others of ``platforms``; FmuBuildError on another host or a missing compiler."""
+    binary_platform()
+    host = host_platform()
+    targets = [host, *[p for p in (platforms or ()) if p != host]]
     try:
-        return find_compiler()
-    except CompilerNotFoundError as exc:
+        for target in targets:
+            compiler_for(target)
+    except CrossCompileError as exc:
+        raise FmuBuildError(str(exc)) from None
+    return targets
+
+
+def _compile(targets: Sequence[Platform], sources: Path, c_files: list[str], root: Path, identifier: str,
+             work: Path, progress: Progress | None) -> None:
+    """The binaries of every target into ``root/binaries/`` (FMI 2.0 folders; macOS slices joined)."""
+    files = [sources / name for name in c_files]
+    try:
+        place_binaries(targets, files, root, identifier, fmi_version=2, work=work, include=[sources],
+                       generated=[f for f in files if f.name.endswith("_casadi.c")], progress=progress)
+    except CrossCompileError as exc:
         raise FmuBuildError(str(exc)) from None
 
 
-def _compile(sources: Path, c_files: list[str], binary: Path, obj_dir: Path) -> None:
-    cc = _compiler()
-    obj_dir.mkdir(parents=True, exist_ok=True)
-    include = [f"-I{sources}"]  # the standard headers are copied into sources/
-    units = [(sources / name, obj_dir / (Path(name).stem + ".o"),
-              (*(CASADI_CFLAGS if name.endswith("_casadi.c") else CFLAGS), *include)) for name in c_files]
-    compile_objects(cc, units, error=FmuBuildError)
-    binary.parent.mkdir(parents=True, exist_ok=True)
-    _run([cc, "-shared", "-o", str(binary), *[str(u[1]) for u in units], "-Wl,--no-undefined", "-Wl,--as-needed", "-lm"],
-         f"linking {binary.name}")
+def build_driver(executable: str | os.PathLike[str], target: Platform | None = None) -> Path:
+    """Compile ``fmu/c/fmu_driver.c``, the plain C importer of the valgrind test, the cross-platform runs and the benchmark.
 
-
-def build_driver(executable: str | os.PathLike[str]) -> Path:
-    """Compile ``fmu/c/fmu_driver.c``, the plain C importer of the valgrind test and the benchmark."""
+    ``target``: a row of :data:`fmu.platforms.PLATFORMS` (default the host's);
+    a Windows driver is an ``.exe`` run under wine, an aarch64 one runs under qemu-user.
+    """
+    target = target or host_platform()
     executable = Path(executable)
     executable.parent.mkdir(parents=True, exist_ok=True)
-    cc = _compiler()
-    flags = [f for f in CFLAGS if f != "-fPIC"]
-    _run([cc, *flags, "-g", f"-I{fmi_headers_dir()}", str(C_DIR / "fmu_driver.c"), "-o", str(executable),
-          "-ldl", "-lm"], "compiling fmu_driver.c")
+    try:
+        cc = compiler_for(target)
+    except CrossCompileError as exc:
+        raise FmuBuildError(str(exc)) from None
+    flags = [f for f in CFLAGS if f not in ("-fPIC", "-fvisibility=hidden")]
+    libs = [] if target.system == "windows" else ["-ldl", "-lm"]
+    _run([*cc, *flags, "-g", f"-I{fmi_headers_dir()}", str(C_DIR / "fmu_driver.c"), "-o", str(executable), *libs],
+         f"compiling fmu_driver.c for {target.name}")
     return executable

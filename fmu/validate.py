@@ -3,7 +3,9 @@
 :func:`validate_fmu` runs every check and returns a :class:`ValidationReport`:
 
 * FMPy's validation of ``modelDescription.xml`` (schema, names, units, ModelStructure);
-* the binary: it exports the ``fmi2`` functions only and needs only libc and libm;
+* the binary: it exports the ``fmi2`` functions only and needs only libc and libm; the
+  binaries of other platforms (Windows, macOS, Linux on aarch64) are listed and
+  checked structurally (:mod:`fmu.binaries`);
 * Co-Simulation and Model Exchange (CVode) runs by FMPy against the Python plant
   integrated by :func:`scipy.integrate.solve_ivp` at a tight tolerance, on the
   computed-torque feed-forward of the robot's task (open loop, so over a short
@@ -196,10 +198,17 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
     check_fmu_archive(fmu_path)
     problems: list[str] = []
     facts: dict[str, Any] = {}
+    from .binaries import carried_platforms
+    from .platforms import host_platform
+
+    host = host_platform()
+    carried = carried_platforms(fmu_path)
+    facts["platforms"] = list(carried)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_check_") as tmp, zipfile.ZipFile(fmu_path) as zf:
-        binaries = [n for n in zf.namelist() if n.startswith("binaries/") and n.endswith(".so")]
+        problems += _other_platforms(zf, carried, host.name, Path(tmp), facts)
+        binaries = [carried[host.name]] if host.name in carried else []
         if not binaries:
-            return [f"{fmu_path}: no binaries/*/*.so in the FMU"], facts
+            return problems + [f"{fmu_path}: no binaries/{host.fmi2_folder}/*{host.suffix} (this machine's) in the FMU"], facts
         lib = Path(zf.extract(binaries[0], tmp))
         tools = [t for t in ("nm", "readelf") if shutil.which(t) is None]
         if tools:
@@ -220,6 +229,25 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
             problems.append(f"{binaries[0]} needs libraries beyond libc and libm: {extra}")
         facts["needed"] = needed
     return problems, facts
+
+
+def _other_platforms(zf: zipfile.ZipFile, carried: dict[str, str], host: str, tmp: Path,
+                     facts: dict[str, Any]) -> list[str]:
+    """Structural checks (llvm-objdump) of the binaries this machine does not load; problems named by member."""
+    from .binaries import check_binary, objdump
+    from .platforms import PLATFORMS
+
+    others = [p for p in PLATFORMS if p.name in carried and p.name != host]
+    tool = objdump()
+    if not others or tool is None:
+        facts["structure"] = "no other platforms" if not others else "not checked: llvm-objdump not on PATH"
+        return []
+    problems = []
+    for target in others:
+        found = check_binary(zf.extract(carried[target.name], tmp / target.name), target, tool)
+        problems += [f"{carried[target.name]} ({target.name}): {p}" for p in found.problems]
+    facts["structure"] = f"checked with llvm-objdump: {', '.join(p.name for p in others)}"
+    return problems
 
 
 def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
@@ -691,6 +719,9 @@ class ValidationReport:
         lines.append(f"  binary: {facts.get('exports', '?')} exported symbols, needs {facts.get('needed', '?')}: "
                      f"{len(self.binary_problems)} problems")
         lines += [f"    - {p}" for p in self.binary_problems]
+        if facts.get("platforms"):
+            lines.append(f"  platforms: {', '.join(facts['platforms'])} (this machine's loaded and run; others "
+                         f"{facts.get('structure', 'not checked')})")
         if self.robot is not None and self.robot_skipped is not None:
             lines.append(f"  robot {self.robot[0]!r} ({self.robot[1]} motors): {self.robot_skipped}; "
                          "simulations against the Python model not run")

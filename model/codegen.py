@@ -330,10 +330,12 @@ def generate_c(functions: Sequence[ca.Function], path: Path, *, with_header: boo
     return path
 
 
-def compile_objects(compiler: str, jobs_list: Sequence[tuple[Path, Path, Sequence[str]]], *,
+def compile_objects(compiler: str | Sequence[str], jobs_list: Sequence[tuple[Path, Path, Sequence[str]]], *,
                     jobs: int | None = None, on_done: Callable[[int, float], None] | None = None,
                     error: type[Exception] = CompileError) -> list[float]:
     """Compile each ``(source, object, flags)`` with ``compiler -c``, ``jobs`` at a time; seconds per unit.
+
+    ``compiler`` is one command or its words (``["python", "-m", "ziglang", "cc", "-target", ...]``).
 
     ``on_done(index, seconds)`` is called as each unit finishes. A failure
     raises ``error`` (default :class:`CompileError`) with the command and the
@@ -344,7 +346,7 @@ def compile_objects(compiler: str, jobs_list: Sequence[tuple[Path, Path, Sequenc
 
     def run(index: int) -> tuple[int, float]:
         source, obj, flags = jobs_list[index]
-        cmd = [compiler, *flags, "-c", str(source), "-o", str(obj)]
+        cmd = [*([compiler] if isinstance(compiler, str) else compiler), *flags, "-c", str(source), "-o", str(obj)]
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
         if proc.returncode != 0:

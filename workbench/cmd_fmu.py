@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from .args import positive_float
 from .outputs import out_file
@@ -20,12 +21,26 @@ def _internal_step(text: str) -> float:
     return value
 
 
+def _say(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
     from fmu.build import export_fmu
+    from fmu.cross import buildable_platforms
+    from fmu.platforms import resolve_platforms
 
+    why = ""
+    if args.platforms is None:  # everything the toolchain builds; the host's alone says why (after the work,
+        platforms, why = buildable_platforms()  # so that a bad input still gives one line)
+    else:
+        platforms = resolve_platforms(args.platforms, flag="--platforms")
     out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
-    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, progress=print)
-    print(f"wrote {path}")
+    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, platforms=platforms,
+                      progress=_say)
+    if why:
+        _say(f"--platforms: {why}")
+    print(f"wrote {path} ({', '.join(p.name for p in platforms)})")
     return 0
 
 
@@ -46,6 +61,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="internal step of the co-simulation integrator (RK4), s (default 0.001, at least 1e-6)")
     p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected",
                    help="motor model of the dynamics (default reflected)")
+    p.add_argument("--platforms", metavar="LIST",
+                   help="comma list of binaries to build: linux64, win64, darwin64 (x86_64 and arm64 in one "
+                        "universal binary), aarch64-linux, or FMI 3.0 names (x86_64-darwin, aarch64-darwin, ...); "
+                        "host = this machine's. Default: all the toolchain can build (all five with the "
+                        "[cross] extra); the host's is always built")
     p.set_defaults(func=_cmd_export)
 
     p = subparsers.add_parser("validate-fmu", help="validate an FMU: description, binary, FMPy (CS and ME), "

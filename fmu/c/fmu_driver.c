@@ -1,6 +1,7 @@
 /*
- * A plain C importer of the FMUs of this wrapper, for the memory check and the
- * benchmark (not part of any FMU). It dlopens an FMU binary and either
+ * A plain C importer of the FMUs of this wrapper, for the memory check, the
+ * cross-platform runs (wine, qemu-user) and the benchmark (not part of any FMU).
+ * It loads an FMU binary (dlopen, or LoadLibrary on Windows) and either
  *
  *   soak  LIB GUID NX REPEATS VR_IN...   instantiates, simulates and frees Co-Simulation and
  *                                        Model Exchange instances REPEATS times, with FMU-state
@@ -8,14 +9,23 @@
  *                                        few rejected calls (run under valgrind); some FMU states
  *                                        are left for fmi2FreeInstance to free (FMI 2.0, 2.1.5), or
  *   bench LIB GUID NX STEPS VR_IN...     times fmi2DoStep at a 1 ms communication step, alone
- *                                        and with fmi2SetReal of the inputs before each step.
+ *                                        and with fmi2SetReal of the inputs before each step, or
+ *   trace LIB GUID NX STEPS VR_IN...     prints the numbers of a run, %.17g, one line each:
+ *                                        "cs K x..." after each of STEPS Co-Simulation steps, then
+ *                                        "me der..." and "me dirder..." (d der(x) / d x[1]) of a Model
+ *                                        Exchange instance
+ *                                        (the numbers the cross-platform tests compare).
  *
  * The model's states have the value references 0..NX-1 (the table's layout).
  * Exit status 0 on success, 1 on any unexpected FMI status.
  */
 #define _POSIX_C_SOURCE 200809L
 
+#ifdef _WIN32
+#include <windows.h>
+#else
 #include <dlfcn.h>
+#endif
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -60,14 +70,34 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     (void)message;
 }
 
-static void *load(void *lib, const char *symbol) {
-    void *f = dlsym(lib, symbol);
+/* The shared library: a HMODULE on Windows, a dlopen handle elsewhere. */
+#ifdef _WIN32
+typedef HMODULE Library;
+static Library open_library(const char *path) { return LoadLibraryA(path); }
+static void close_library(Library lib) { FreeLibrary(lib); }
+static void report_open_error(void) { fprintf(stderr, "LoadLibrary: error %lu\n", (unsigned long)GetLastError()); }
+static void *find_symbol(Library lib, const char *symbol) {
+    FARPROC f = GetProcAddress(lib, symbol);
+    void *p = NULL;
+    memcpy(&p, &f, sizeof(p));
+    return p;
+}
+#else
+typedef void *Library;
+static Library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void close_library(Library lib) { dlclose(lib); }
+static void report_open_error(void) { fprintf(stderr, "dlopen: %s\n", dlerror()); }
+static void *find_symbol(Library lib, const char *symbol) { return dlsym(lib, symbol); }
+#endif
+
+static void *load(Library lib, const char *symbol) {
+    void *f = find_symbol(lib, symbol);
     if (f == NULL) fprintf(stderr, "missing symbol %s\n", symbol);
     return f;
 }
 
-static int load_api(void *lib, Api *api) {
-    /* POSIX: dlsym's object pointer converts to a function pointer through memcpy */
+static int load_api(Library lib, Api *api) {
+    /* an object pointer converts to a function pointer through memcpy (POSIX dlsym; C99 has no cast) */
 #define LOAD(field, name)                            \
     do {                                             \
         void *p_ = load(lib, name);                  \
@@ -238,9 +268,72 @@ done:
 }
 
 static double now(void) {
+#ifdef _WIN32
+    LARGE_INTEGER count, frequency;
+    QueryPerformanceCounter(&count);
+    QueryPerformanceFrequency(&frequency);
+    return (double)count.QuadPart / (double)frequency.QuadPart;
+#else
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+#endif
+}
+
+static void print_row(const char *label, const double *v, size_t n) {
+    size_t i;
+    printf("%s", label);
+    for (i = 0; i < n; i++) printf(" %.17g", v[i]);
+    printf("\n");
+}
+
+/* The numbers of one run: states after each Co-Simulation step, then ME derivatives. */
+static void trace(const Api *api, const fmi2CallbackFunctions *cb, const char *guid, size_t nx, long steps,
+                  const fmi2ValueReference *vr_in, size_t n_in) {
+    const double h = 1e-3;
+    double u[64] = {0.0}, x[64] = {0.0}, dx[64] = {0.0};
+    fmi2ValueReference vr_x[64], vr_der[64], vr_known;
+    double seed = 1.0, sens[64] = {0.0};
+    char label[32];
+    size_t i;
+    long k;
+    fmi2Component c;
+
+    if (nx > 64 || n_in > 64) {
+        fprintf(stderr, "trace: at most 64 states and inputs\n");
+        failures++;
+        return;
+    }
+    for (i = 0; i < nx; i++) {
+        vr_x[i] = (fmi2ValueReference)i;
+        vr_der[i] = (fmi2ValueReference)(nx + i);
+    }
+    vr_known = nx > 1 ? 1 : 0; /* the derivatives' sensitivity to the second state (q[1] of a robot) */
+    c = start(api, cb, guid, fmi2CoSimulation);
+    if (c == NULL) return;
+    for (k = 0; k < steps; k++) {
+        double t = (double)k * h;
+        inputs_at(t, n_in, u);
+        expect(api->set_real(c, vr_in, n_in, u), fmi2OK, "fmi2SetReal");
+        expect(api->do_step(c, t, h, fmi2True), fmi2OK, "fmi2DoStep");
+        expect(api->get_real(c, vr_x, nx, x), fmi2OK, "fmi2GetReal");
+        snprintf(label, sizeof(label), "cs %ld", k + 1);
+        print_row(label, x, nx);
+    }
+    api->free_instance(c);
+    c = start(api, cb, guid, fmi2ModelExchange);
+    if (c == NULL) return;
+    expect(api->enter_continuous(c), fmi2OK, "fmi2EnterContinuousTimeMode");
+    for (i = 0; i < nx; i++) x[i] = 0.1 * (double)(i + 1);
+    inputs_at(0.25, n_in, u);
+    expect(api->set_real(c, vr_in, n_in, u), fmi2OK, "fmi2SetReal (ME)");
+    expect(api->set_states(c, x, nx), fmi2OK, "fmi2SetContinuousStates");
+    expect(api->get_derivatives(c, dx, nx), fmi2OK, "fmi2GetDerivatives");
+    print_row("me der", dx, nx);
+    expect(api->directional(c, vr_der, nx, &vr_known, 1, &seed, sens), fmi2OK, "fmi2GetDirectionalDerivative");
+    print_row("me dirder", sens, nx);
+    expect(api->terminate(c), fmi2OK, "fmi2Terminate (ME)");
+    api->free_instance(c);
 }
 
 static void bench(const Api *api, const fmi2CallbackFunctions *cb, const char *guid, long steps,
@@ -273,28 +366,28 @@ static void bench(const Api *api, const fmi2CallbackFunctions *cb, const char *g
 
 int main(int argc, char **argv) {
     Api api;
-    void *lib;
+    Library lib;
     fmi2CallbackFunctions cb;
     fmi2ValueReference vr_in[64];
     size_t n_in = 0, nx;
     long count, r;
     int i;
 
-    if (argc < 5 || (strcmp(argv[1], "soak") != 0 && strcmp(argv[1], "bench") != 0)) {
-        fprintf(stderr, "usage: %s soak|bench LIB GUID NX COUNT [VR_IN...]\n", argv[0]);
+    if (argc < 5 || (strcmp(argv[1], "soak") != 0 && strcmp(argv[1], "bench") != 0 && strcmp(argv[1], "trace") != 0)) {
+        fprintf(stderr, "usage: %s soak|bench|trace LIB GUID NX COUNT [VR_IN...]\n", argv[0]);
         return 2;
     }
     nx = (size_t)strtoul(argv[4], NULL, 10);
     count = argc > 5 ? strtol(argv[5], NULL, 10) : 1;
     for (i = 6; i < argc && n_in < 64; i++) vr_in[n_in++] = (fmi2ValueReference)strtoul(argv[i], NULL, 10);
 
-    lib = dlopen(argv[2], RTLD_NOW | RTLD_LOCAL);
+    lib = open_library(argv[2]);
     if (lib == NULL) {
-        fprintf(stderr, "dlopen: %s\n", dlerror());
+        report_open_error();
         return 1;
     }
     if (load_api(lib, &api) != 0) {
-        dlclose(lib);
+        close_library(lib);
         return 1;
     }
     cb.logger = logger;
@@ -312,9 +405,11 @@ int main(int argc, char **argv) {
             run_me(&api, &cb, argv[3], nx);
         }
         printf("soak: %ld repetitions, %d failures\n", count, failures);
+    } else if (strcmp(argv[1], "trace") == 0) {
+        trace(&api, &cb, argv[3], nx, count, vr_in, n_in);
     } else {
         bench(&api, &cb, argv[3], count, vr_in, n_in);
     }
-    dlclose(lib);
+    close_library(lib);
     return failures == 0 ? 0 : 1;
 }
