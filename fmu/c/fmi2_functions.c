@@ -77,7 +77,7 @@ static const char *mode_name(unsigned int mode) {
 
 /* Log an error, enter the error mode, return fmi2Error. */
 static fmi2Status fail(MwInstance *inst, const char *fn, const char *what) {
-    mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: %s", fn, what);
+    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: %s", fn, what);
     inst->mode = MW_MODE_ERROR;
     return fmi2Error;
 }
@@ -86,17 +86,17 @@ static fmi2Status fail(MwInstance *inst, const char *fn, const char *what) {
 static MwInstance *enter(fmi2Component c, const char *fn, int interface_type, unsigned int modes) {
     MwInstance *inst = (MwInstance *)c;
     if (inst == NULL) return NULL;
-    mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s", fn);
-    if (interface_type == FOR_ME && inst->type != fmi2ModelExchange) {
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s", fn);
+    if (interface_type == FOR_ME && inst->type != MW_MODEL_EXCHANGE) {
         fail(inst, fn, "this function belongs to Model Exchange, the instance is Co-Simulation");
         return NULL;
     }
-    if (interface_type == FOR_CS && inst->type != fmi2CoSimulation) {
+    if (interface_type == FOR_CS && inst->type != MW_CO_SIMULATION) {
         fail(inst, fn, "this function belongs to Co-Simulation, the instance is Model Exchange");
         return NULL;
     }
     if ((inst->mode & modes) == 0) {
-        mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in mode \"%s\"", fn,
+        mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in mode \"%s\"", fn,
                mode_name(inst->mode));
         inst->mode = MW_MODE_ERROR;
         return NULL;
@@ -110,7 +110,7 @@ static MwInstance *enter(fmi2Component c, const char *fn, int interface_type, un
 
 static int null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr) {
     if (ptr != NULL) return 0;
-    mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
+    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
     inst->mode = MW_MODE_ERROR;
     return 1;
 }
@@ -134,7 +134,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[]) {
     ENTER(SetDebugLogging, FOR_ANY, MODES_SetDebugLogging);
     if (nCategories > 0 && null_arg(inst, "fmi2SetDebugLogging", "categories[]", categories)) return fmi2Error;
-    return mw_set_logging(inst, loggingOn, nCategories, categories);
+    return (fmi2Status)mw_set_logging(inst, "fmi2SetDebugLogging", loggingOn, nCategories, categories);
 }
 
 /* Times within a relative 1e-12 (absolute near 0) count as equal, as floating-point sums of steps differ. */
@@ -151,8 +151,21 @@ static int past_stop_time(const MwInstance *inst, double t) {
 /* A non-finite computed value: logged, and the call returns fmi2Discard (the one policy). */
 static fmi2Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
     if (mw_all_finite(v, n)) return fmi2OK;
-    mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
+    mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
     return fmi2Discard;
+}
+
+/* The instance's log lines to the importer's fmi2CallbackLogger, whose message is a format string. */
+static void log_to_importer(const MwInstance *inst, MwStatus status, const char *category, const char *message) {
+    char escaped[2048];
+    size_t i, j;
+    fmi2CallbackLogger logger = (fmi2CallbackLogger)inst->host.logger;
+    for (i = 0, j = 0; message[i] != '\0' && j + 2 < sizeof(escaped); i++) {
+        if (message[i] == '%') escaped[j++] = '%'; /* protect every '%' */
+        escaped[j++] = message[i];
+    }
+    escaped[j] = '\0';
+    logger(inst->host.env, inst->name, (fmi2Status)status, category, escaped);
 }
 
 static void log_before_instance(const fmi2CallbackFunctions *functions, fmi2String name, const char *message) {
@@ -165,6 +178,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     const MwModel *model = mw_model();
     MwInstance *inst;
+    MwHost host;
     (void)fmuResourceLocation; /* the model needs no resources */
     (void)visible;
 
@@ -191,7 +205,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                             "fmi2Instantiate: wrong GUID: it does not match the modelDescription.xml of this binary");
         return NULL;
     }
-    inst = mw_instance_new(model, fmuType, instanceName, functions, loggingOn);
+    host.alloc = functions->allocateMemory;
+    host.release = functions->freeMemory;
+    host.log = log_to_importer;
+    host.env = functions->componentEnvironment;
+    host.logger = (MwAnyFunction)functions->logger;
+    inst = mw_instance_new(model, fmuType == fmi2ModelExchange ? MW_MODEL_EXCHANGE : MW_CO_SIMULATION, instanceName,
+                           &host, loggingOn);
     if (inst == NULL) {
         log_before_instance(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
@@ -202,7 +222,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 void fmi2FreeInstance(fmi2Component c) {
     MwInstance *inst = (MwInstance *)c;
     if (inst == NULL) return;
-    mw_log(inst, fmi2OK, MW_LOG_CALLS, "fmi2FreeInstance");
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "fmi2FreeInstance");
     mw_instance_free(inst);
 }
 
@@ -237,7 +257,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
                                                                     : "the initial friction modes did not settle");
     if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
         return fail(inst, "fmi2ExitInitializationMode", "the initial state and parameters give non-finite derivatives");
-    inst->mode = inst->type == fmi2ModelExchange ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
+    inst->mode = inst->type == MW_MODEL_EXCHANGE ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
     return fmi2OK;
 }
 
@@ -458,7 +478,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
                  (unsigned long)size, (unsigned long)mw_serialized_size(inst->model));
         return fail(inst, "fmi2SerializeFMUstate", what);
     }
-    mw_serialize(inst->model, snap, serializedState);
+    mw_serialize(inst->model, snap, (unsigned char *)serializedState);
     return fmi2OK;
 }
 
@@ -474,7 +494,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     /* *FMUstate is an output: its incoming value is not read; a new FMU state is always allocated */
     snap = mw_snapshot_new(inst);
     if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "out of memory");
-    problem = mw_deserialize(inst, serializedState, size, snap);
+    problem = mw_deserialize(inst, (const unsigned char *)serializedState, size, snap);
     if (problem != NULL) {
         mw_snapshot_free(inst, snap);
         snprintf(what, sizeof(what), "%lu bytes rejected: %s", (unsigned long)size, problem);
@@ -737,9 +757,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                  communicationStepSize, MW_MAX_SUBSTEPS, inst->h_int);
         return fail(inst, fn, what);
     }
-    mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s", fn,
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s", fn,
            currentCommunicationPoint, n, communicationStepSize / (double)n);
-    status = mw_do_step(inst, currentCommunicationPoint, communicationStepSize, n);
+    status = (fmi2Status)mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, n);
     if (status == fmi2Discard) {
         inst->mode = MW_MODE_STEP_FAILED;
     } else if (status == fmi2Error) {
@@ -754,7 +774,7 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 }
 
 static fmi2Status status_unavailable(MwInstance *inst, const char *fn, int kind) {
-    mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: status kind %d is not available from this FMU", fn, kind);
+    mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: status kind %d is not available from this FMU", fn, kind);
     return fmi2Discard;
 }
 

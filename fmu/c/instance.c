@@ -27,8 +27,8 @@ static int work_sizes(const MwFunction *f, mw_int *sz_arg, mw_int *sz_res, mw_in
     return 0;
 }
 
-MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name,
-                            const fmi2CallbackFunctions *cb, fmi2Boolean logging_on) {
+MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *name, const MwHost *host,
+                            int logging_on) {
     MwInstance *inst;
     mw_int sz_arg = 7, sz_res = 2, sz_iw = 0, sz_w = 0;
     size_t nx = model->nx, nu = model->nu, np = model->np, ny = model->ny, nz = model->nz;
@@ -46,21 +46,21 @@ MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name
     }
     if (sz_arg < 0 || sz_res < 0 || sz_iw < 0 || sz_w < 0) return NULL;
 
-    inst = (MwInstance *)cb->allocateMemory(1, sizeof(MwInstance));
+    inst = (MwInstance *)host->alloc(1, sizeof(MwInstance));
     if (inst == NULL) return NULL;
     memset(inst, 0, sizeof(*inst));
-    inst->cb = *cb;
+    inst->host = *host;
     inst->model = model;
     inst->type = type;
 
     name_len = strlen(name);
-    inst->name = (char *)cb->allocateMemory(name_len + 1, sizeof(char));
+    inst->name = (char *)host->alloc(name_len + 1, sizeof(char));
     /* x, u, p, m, xdot, y; x_save, x_stage, k1..k4; m_save, z0, z1, next; dx, du, dp, dxdot, dy; w */
     n_doubles = (nx + nu + np + nz + nx + ny) + 6 * nx + (4 * nz + nx) + (nx + nu + np + nx + ny) + (size_t)sz_w;
-    inst->block = (double *)cb->allocateMemory(at_least_one(n_doubles), sizeof(double));
-    inst->arg = (const double **)cb->allocateMemory((size_t)sz_arg, sizeof(const double *));
-    inst->res = (double **)cb->allocateMemory((size_t)sz_res, sizeof(double *));
-    inst->iw = (mw_int *)cb->allocateMemory(at_least_one((size_t)sz_iw), sizeof(mw_int));
+    inst->block = (double *)host->alloc(at_least_one(n_doubles), sizeof(double));
+    inst->arg = (const double **)host->alloc((size_t)sz_arg, sizeof(const double *));
+    inst->res = (double **)host->alloc((size_t)sz_res, sizeof(double *));
+    inst->iw = (mw_int *)host->alloc(at_least_one((size_t)sz_iw), sizeof(mw_int));
     if (inst->name == NULL || inst->block == NULL || inst->arg == NULL || inst->res == NULL || inst->iw == NULL) {
         mw_instance_free(inst);
         return NULL;
@@ -99,10 +99,10 @@ MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name
 }
 
 void mw_instance_free(MwInstance *inst) {
-    fmi2CallbackFreeMemory release;
+    void (*release)(void *);
     if (inst == NULL) return;
-    release = inst->cb.freeMemory;
-    /* FMU states the importer did not free go with the instance (FMI 2.0, 2.1.5) */
+    release = inst->host.release;
+    /* FMU states the importer did not free go with the instance (FMI 2.0, 2.1.5; FMI 3.0, 2.3.3) */
     while (inst->snapshots != NULL) mw_snapshot_free(inst, inst->snapshots);
     if (inst->name != NULL) release(inst->name);
     if (inst->block != NULL) release(inst->block);
@@ -133,43 +133,33 @@ void mw_set_start_values(MwInstance *inst) {
 
 /* ----------------------------------------------------------------- logging */
 
-void mw_log(const MwInstance *inst, fmi2Status status, MwLogCategory category, const char *fmt, ...) {
+void mw_log(const MwInstance *inst, MwStatus status, MwLogCategory category, const char *fmt, ...) {
     char text[1024];
-    char escaped[2048];
-    size_t i, j;
     va_list args;
 
-    if (inst == NULL || inst->cb.logger == NULL || category >= MW_LOG_COUNT) return;
+    if (inst == NULL || inst->host.log == NULL || category >= MW_LOG_COUNT) return;
     if ((inst->log_mask & (1u << category)) == 0) return;
 
     va_start(args, fmt);
     vsnprintf(text, sizeof(text), fmt, args);
     va_end(args);
-
-    /* The logger's message is itself a format string: protect every '%'. */
-    for (i = 0, j = 0; text[i] != '\0' && j + 2 < sizeof(escaped); i++) {
-        if (text[i] == '%') escaped[j++] = '%';
-        escaped[j++] = text[i];
-    }
-    escaped[j] = '\0';
-    inst->cb.logger(inst->cb.componentEnvironment, inst->name, status, mw_category_names[category], escaped);
+    inst->host.log(inst, status, mw_category_names[category], text);
 }
 
-fmi2Status mw_set_logging(MwInstance *inst, fmi2Boolean on, size_t n, const fmi2String categories[]) {
+MwStatus mw_set_logging(MwInstance *inst, const char *fn, int on, size_t n, const char *const categories[]) {
     size_t i;
     int k;
-    fmi2Status status = fmi2OK;
+    MwStatus status = MW_OK;
 
     if (n == 0) {
         inst->log_mask = on ? (1u << MW_LOG_COUNT) - 1u : 0u;
-        return fmi2OK;
+        return MW_OK;
     }
     for (i = 0; i < n; i++) {
         unsigned int bits = 0;
         if (categories[i] == NULL) {
-            mw_log(inst, fmi2Warning, MW_LOG_WARNING, "fmi2SetDebugLogging: category %u is NULL, ignored",
-                   (unsigned int)i);
-            status = fmi2Warning;
+            mw_log(inst, MW_WARNING, MW_LOG_WARNING, "%s: category %u is NULL, ignored", fn, (unsigned int)i);
+            status = MW_WARNING;
             continue;
         }
         if (strcmp(categories[i], "logAll") == 0) {
@@ -180,9 +170,9 @@ fmi2Status mw_set_logging(MwInstance *inst, fmi2Boolean on, size_t n, const fmi2
             }
         }
         if (bits == 0) {
-            mw_log(inst, fmi2Warning, MW_LOG_WARNING,
-                   "fmi2SetDebugLogging: unknown log category \"%.100s\", ignored", categories[i]);
-            status = fmi2Warning;
+            mw_log(inst, MW_WARNING, MW_LOG_WARNING, "%s: unknown log category \"%.100s\", ignored", fn,
+                   categories[i]);
+            status = MW_WARNING;
             continue;
         }
         if (on) {
@@ -376,7 +366,7 @@ static int substep(MwInstance *inst, double hs) {
     return 0;
 }
 
-fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long n) {
+MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long n) {
     const size_t nx = inst->model->nx, nz = inst->model->nz;
     const double hs = h / (double)n;
     unsigned long long k;
@@ -393,17 +383,17 @@ fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long 
         if (nz > 0) memcpy(inst->m, inst->m_save, nz * sizeof(double));
         mw_invalidate(inst);
         inst->last_successful_time = tc;
-        mw_log(inst, fmi2Discard, MW_LOG_DISCARD,
-               "fmi2DoStep: %s in sub-step %llu of %llu at t = %.17g; the state at the communication point "
+        mw_log(inst, MW_DISCARD, MW_LOG_DISCARD,
+               "%s: %s in sub-step %llu of %llu at t = %.17g; the state at the communication point "
                "%.17g is kept",
-               status == -1 ? "the state became non-finite" :
+               fn, status == -1 ? "the state became non-finite" :
                status == -2 ? "the friction modes did not settle" : "more than 64 friction events",
                k, n, tc + (double)(k > 0 ? k - 1 : 0) * hs, tc);
-        return fmi2Discard;
+        return MW_DISCARD;
     }
     inst->time = tc + h;
     inst->last_successful_time = inst->time;
-    return fmi2OK;
+    return MW_OK;
 }
 
 /* --------------------------------------------------------------- snapshots */
@@ -411,7 +401,7 @@ fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long 
 MwSnapshot *mw_snapshot_new(MwInstance *inst) {
     const MwModel *m = inst->model;
     size_t nv = m->nx + m->nu + m->np + m->nz;
-    MwSnapshot *snap = (MwSnapshot *)inst->cb.allocateMemory(1, sizeof(MwSnapshot) + nv * sizeof(double));
+    MwSnapshot *snap = (MwSnapshot *)inst->host.alloc(1, sizeof(MwSnapshot) + nv * sizeof(double));
     if (snap == NULL) return NULL;
     snap->mode = inst->mode;
     snap->time = inst->time;
@@ -441,7 +431,7 @@ void mw_snapshot_free(MwInstance *inst, MwSnapshot *snap) {
         inst->snapshots = snap->next;
     }
     if (snap->next != NULL) snap->next->prev = snap->prev;
-    inst->cb.freeMemory(snap);
+    inst->host.release(snap);
 }
 
 void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap) {
@@ -471,7 +461,7 @@ void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap) {
 
 int mw_mode_valid(const MwInstance *inst, unsigned int mode) {
     unsigned int allowed = MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_TERMINATED | MW_MODE_ERROR;
-    if (inst->type == fmi2ModelExchange) {
+    if (inst->type == MW_MODEL_EXCHANGE) {
         allowed |= MW_MODE_EVENT | MW_MODE_CONTINUOUS;
     } else {
         allowed |= MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED;
@@ -502,18 +492,18 @@ size_t mw_serialized_size(const MwModel *m) {
     return MW_SER_HEADER + (m->nx + m->nu + m->np + m->nz) * sizeof(double);
 }
 
-static void put_u32(fmi2Byte *out, size_t at, unsigned int v) {
+static void put_u32(unsigned char *out, size_t at, unsigned int v) {
     unsigned int w = v;
     memcpy(out + at, &w, 4);
 }
 
-static unsigned int get_u32(const fmi2Byte *in, size_t at) {
+static unsigned int get_u32(const unsigned char *in, size_t at) {
     unsigned int v;
     memcpy(&v, in + at, 4);
     return v;
 }
 
-void mw_serialize(const MwModel *m, const MwSnapshot *snap, fmi2Byte *out) {
+void mw_serialize(const MwModel *m, const MwSnapshot *snap, unsigned char *out) {
     unsigned long long total = (unsigned long long)mw_serialized_size(m);
     size_t guid_len = strlen(m->guid);
     size_t nv = m->nx + m->nu + m->np + m->nz;
@@ -535,7 +525,7 @@ void mw_serialize(const MwModel *m, const MwSnapshot *snap, fmi2Byte *out) {
     if (nv > 0) memcpy(out + MW_SER_HEADER, snap->values, nv * sizeof(double));
 }
 
-const char *mw_deserialize(const MwInstance *inst, const fmi2Byte *in, size_t size, MwSnapshot *snap) {
+const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size_t size, MwSnapshot *snap) {
     const MwModel *m = inst->model;
     size_t expected = mw_serialized_size(m);
     size_t nv = m->nx + m->nu + m->np + m->nz;

@@ -1,23 +1,50 @@
 /*
  * One FMU instance: its storage, logging, model evaluation, the co-simulation
- * integrator and FMU-state snapshots. Used by fmi2_functions.c, which owns the
- * FMI 2.0 state machine and the argument checks. No global mutable state:
- * everything an instance touches lives in its MwInstance.
+ * integrator and FMU-state snapshots. Used by fmi2_functions.c and
+ * fmi3_functions.c, which own the state machines of FMI 2.0 and FMI 3.0 and the
+ * argument checks; nothing here depends on the FMI version (no FMI header is
+ * included: statuses, interface types and the importer's callbacks reach this
+ * file in the neutral types below). No global mutable state: everything an
+ * instance touches lives in its MwInstance.
  */
 #ifndef MW_INSTANCE_H
 #define MW_INSTANCE_H
 
-#include "fmi2Functions.h"
 #include "model.h"
 
-/* Modes of the FMI 2.0 state machines of Model Exchange and Co-Simulation, as bits. */
+/* Statuses, numbered as fmi2Status and fmi3Status (OK, Warning, Discard, Error, Fatal). */
+typedef enum { MW_OK = 0, MW_WARNING = 1, MW_DISCARD = 2, MW_ERROR = 3, MW_FATAL = 4 } MwStatus;
+
+/* The interface an instance was created for. */
+typedef enum { MW_MODEL_EXCHANGE = 0, MW_CO_SIMULATION = 1 } MwInterface;
+
+/* A function pointer of any type, stored and cast back by the wrapper that owns it. */
+typedef void (*MwAnyFunction)(void);
+
+typedef struct MwInstance MwInstance;
+
+/*
+ * What the importer gave: memory functions (calloc/free semantics) and the wrapper's adapter
+ * that passes one log line, already formatted, to the importer's logger (env and logger are the
+ * importer's environment pointer and logging function, for the adapter only).
+ */
+typedef struct {
+    void *(*alloc)(size_t n, size_t size);
+    void (*release)(void *p);
+    void (*log)(const MwInstance *inst, MwStatus status, const char *category, const char *message);
+    void *env;
+    MwAnyFunction logger;
+} MwHost;
+
+/* Modes of the state machines of Model Exchange and Co-Simulation (FMI 2.0 and 3.0), as bits.
+   STEP_COMPLETE is FMI 3.0's Step Mode. */
 typedef enum {
     MW_MODE_INSTANTIATED = 1u << 0,
     MW_MODE_INIT = 1u << 1,
     MW_MODE_EVENT = 1u << 2,         /* Model Exchange */
     MW_MODE_CONTINUOUS = 1u << 3,    /* Model Exchange */
     MW_MODE_STEP_COMPLETE = 1u << 4, /* Co-Simulation */
-    MW_MODE_STEP_FAILED = 1u << 5,   /* Co-Simulation, after fmi2DoStep returned fmi2Discard */
+    MW_MODE_STEP_FAILED = 1u << 5,   /* Co-Simulation, after DoStep returned Discard (FMI 2.0 only) */
     MW_MODE_TERMINATED = 1u << 6,
     MW_MODE_ERROR = 1u << 7
 } MwMode;
@@ -32,25 +59,25 @@ typedef enum {
     MW_LOG_COUNT = 5
 } MwLogCategory;
 
-/* Most RK4 sub-steps one fmi2DoStep may take: bounds the work (and the time) of one call. */
+/* Most RK4 sub-steps one DoStep may take: bounds the work (and the time) of one call. */
 #define MW_MAX_SUBSTEPS 1000000ull
 /* Relative noise in communicationStepSize / internal_step forgiven when counting sub-steps. */
 #define MW_SUBSTEP_RTOL 1e-8
 
 typedef struct MwSnapshot MwSnapshot;
 
-typedef struct {
+struct MwInstance {
     const MwModel *model;
-    fmi2Type type;
+    MwInterface type;
     unsigned int mode;
-    fmi2CallbackFunctions cb;
+    MwHost host;
     char *name;
     unsigned int log_mask;
 
     double time;
     double last_successful_time;
     double h_int;
-    int stop_time_defined; /* fmi2SetupExperiment's stopTime, enforced by fmi2DoStep and fmi2SetTime */
+    int stop_time_defined; /* the experiment's stopTime, enforced by DoStep and SetTime */
     double stop_time;
 
     /* every FMU state taken from this instance and not yet freed, freed with the instance */
@@ -74,9 +101,9 @@ typedef struct {
     double *w;
 
     double *block; /* one allocation holding every double vector above */
-} MwInstance;
+};
 
-/* A copy of what fmi2GetFMUstate saves: mode, times, internal step, x, u, p and m. */
+/* A copy of what GetFMUstate saves: mode, times, internal step, x, u, p and m. */
 struct MwSnapshot {
     MwSnapshot *prev, *next; /* the owning instance's list */
     unsigned int mode;
@@ -111,8 +138,8 @@ struct MwSnapshot {
 #define mw_deserialize MW_SYMBOL(mw_deserialize)
 #define mw_mode_valid MW_SYMBOL(mw_mode_valid)
 
-MW_HIDDEN MwInstance *mw_instance_new(const MwModel *model, fmi2Type type, fmi2String name,
-                                      const fmi2CallbackFunctions *cb, fmi2Boolean logging_on);
+MW_HIDDEN MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *name,
+                                      const MwHost *host, int logging_on);
 MW_HIDDEN void mw_instance_free(MwInstance *inst);
 MW_HIDDEN void mw_set_start_values(MwInstance *inst);
 MW_HIDDEN void mw_invalidate(MwInstance *inst);
@@ -122,9 +149,10 @@ MW_HIDDEN void mw_invalidate(MwInstance *inst);
 #else
 #define MW_PRINTF(a, b)
 #endif
-MW_HIDDEN void mw_log(const MwInstance *inst, fmi2Status status, MwLogCategory category,
+MW_HIDDEN void mw_log(const MwInstance *inst, MwStatus status, MwLogCategory category,
                       const char *fmt, ...) MW_PRINTF(4, 5);
-MW_HIDDEN fmi2Status mw_set_logging(MwInstance *inst, fmi2Boolean on, size_t n, const fmi2String categories[]);
+/* fn: the calling FMI function, for the warnings about unknown categories. */
+MW_HIDDEN MwStatus mw_set_logging(MwInstance *inst, const char *fn, int on, size_t n, const char *const categories[]);
 
 /* 0 on success; -1 if CasADi reported an error. */
 MW_HIDDEN int mw_update_derivatives(MwInstance *inst);
@@ -139,8 +167,9 @@ MW_HIDDEN int mw_all_finite(const double *v, size_t n);
  */
 MW_HIDDEN unsigned long long mw_substeps(double h, double h_int);
 
-/* The co-simulation step from tc to tc + h in n sub-steps; fmi2Discard keeps the state at tc. */
-MW_HIDDEN fmi2Status mw_do_step(MwInstance *inst, double tc, double h, unsigned long long n);
+/* The co-simulation step from tc to tc + h in n sub-steps; MW_DISCARD keeps the state at tc (fn: the
+   calling FMI function, for the message). */
+MW_HIDDEN MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long n);
 
 /* The event indicators at state x (current u, p, m) into z; 0 on success. */
 MW_HIDDEN int mw_events(MwInstance *inst, const double *x, double *z);
@@ -165,9 +194,9 @@ MW_HIDDEN void mw_snapshot_free(MwInstance *inst, MwSnapshot *snap);
 MW_HIDDEN void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap);
 MW_HIDDEN void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap);
 MW_HIDDEN size_t mw_serialized_size(const MwModel *model);
-MW_HIDDEN void mw_serialize(const MwModel *model, const MwSnapshot *snap, fmi2Byte *out);
+MW_HIDDEN void mw_serialize(const MwModel *model, const MwSnapshot *snap, unsigned char *out);
 /* 0 on success, else a message saying what is wrong with the bytes. */
-MW_HIDDEN const char *mw_deserialize(const MwInstance *inst, const fmi2Byte *in, size_t size, MwSnapshot *snap);
+MW_HIDDEN const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size_t size, MwSnapshot *snap);
 MW_HIDDEN int mw_mode_valid(const MwInstance *inst, unsigned int mode);
 
 #endif /* MW_INSTANCE_H */
