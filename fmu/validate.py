@@ -237,7 +237,9 @@ def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
 
 def _robot_node(fmu_path: str | os.PathLike[str]) -> ET.Element | None:
     root = ET.fromstring(model_description_xml(fmu_path))
-    node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")
+    node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")  # FMI 2.0
+    if node is None:
+        node = root.find("./Annotations/Annotation[@type='manipulator-workbench']/Robot")  # FMI 3.0
     if node is None or not node.get("name"):
         return None
     return node

@@ -288,31 +288,16 @@ static const MwVariable *lookup(MwInstance *inst, const char *fn, fmi2ValueRefer
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     size_t i;
-    int need_xdot = 0, need_y = 0;
     ENTER(GetReal, FOR_ANY, MODES_GetValue);
     if (nvr == 0) return fmi2OK;
     if (null_arg(inst, "fmi2GetReal", "vr[]", vr) || null_arg(inst, "fmi2GetReal", "value[]", value)) return fmi2Error;
     for (i = 0; i < nvr; i++) {
-        const MwVariable *v = lookup(inst, "fmi2GetReal", vr[i]);
-        if (v == NULL) return fmi2Error;
-        need_xdot |= v->kind == MW_KIND_DERIVATIVE;
-        need_y |= v->kind == MW_KIND_OUTPUT;
+        if (lookup(inst, "fmi2GetReal", vr[i]) == NULL) return fmi2Error;
     }
-    if (need_xdot && mw_update_derivatives(inst) != 0)
-        return fail(inst, "fmi2GetReal", "the model failed to evaluate the derivatives");
-    if (need_y && mw_update_outputs(inst) != 0)
-        return fail(inst, "fmi2GetReal", "the model failed to evaluate the outputs");
     for (i = 0; i < nvr; i++) {
         const MwVariable *v = &inst->model->variables[vr[i]];
-        switch ((MwKind)v->kind) {
-        case MW_KIND_STATE: value[i] = inst->x[v->index]; break;
-        case MW_KIND_DERIVATIVE: value[i] = inst->xdot[v->index]; break;
-        case MW_KIND_INPUT: value[i] = inst->u[v->index]; break;
-        case MW_KIND_PARAMETER: value[i] = inst->p[v->index]; break;
-        case MW_KIND_OUTPUT: value[i] = inst->y[v->index]; break;
-        case MW_KIND_STEP: value[i] = inst->h_int; break;
-        default: return fail(inst, "fmi2GetReal", "corrupt variable table");
-        }
+        if (mw_prepare(inst, v) != 0) return fail(inst, "fmi2GetReal", "the model failed to evaluate");
+        value[i] = mw_value(inst, v);
     }
     return non_finite(inst, "fmi2GetReal", "the values", value, nvr);
 }
@@ -373,16 +358,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         }
     }
     for (i = 0; i < nvr; i++) {
-        const MwVariable *v = &inst->model->variables[vr[i]];
-        switch ((MwKind)v->kind) {
-        case MW_KIND_STATE: inst->x[v->index] = value[i]; break;
-        case MW_KIND_INPUT: inst->u[v->index] = value[i]; break;
-        case MW_KIND_PARAMETER: inst->p[v->index] = value[i]; break;
-        case MW_KIND_STEP: inst->h_int = value[i]; break;
-        default: return fail(inst, "fmi2SetReal", "corrupt variable table");
-        }
+        if (mw_assign(inst, &inst->model->variables[vr[i]], value[i]) != 0)
+            return fail(inst, "fmi2SetReal", "corrupt variable table");
     }
-    mw_invalidate(inst);
     return fmi2OK;
 }
 
@@ -522,9 +500,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     if (nKnown > 0 && (null_arg(inst, fn, "vKnown_ref[]", vKnown_ref) || null_arg(inst, fn, "dvKnown[]", dvKnown)))
         return fmi2Error;
 
-    if (m->nx > 0) memset(inst->dx, 0, m->nx * sizeof(double));
-    if (m->nu > 0) memset(inst->du, 0, m->nu * sizeof(double));
-    if (m->np > 0) memset(inst->dp, 0, m->np * sizeof(double));
+    mw_clear_seeds(inst);
     for (i = 0; i < nKnown; i++) {
         const MwVariable *v = lookup(inst, fn, vKnown_ref[i]);
         if (v == NULL) return fmi2Error;
@@ -532,11 +508,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             snprintf(what, sizeof(what), "the seed of %.60s is not finite", v->name);
             return fail(inst, fn, what);
         }
-        switch ((MwKind)v->kind) {
-        case MW_KIND_STATE: inst->dx[v->index] += dvKnown[i]; break;
-        case MW_KIND_INPUT: inst->du[v->index] += dvKnown[i]; break;
-        case MW_KIND_PARAMETER: inst->dp[v->index] += dvKnown[i]; break;
-        default:
+        if (mw_seed(inst, v, dvKnown[i], 0) != 0) {
             snprintf(what, sizeof(what), "%.60s cannot be a known: knowns are states, inputs and parameters", v->name);
             return fail(inst, fn, what);
         }
@@ -554,16 +526,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         }
     }
     if (mw_directional(inst, need_dxdot, need_dy) != 0) return fail(inst, fn, "the model failed to evaluate");
-    for (i = 0; i < nUnknown; i++) {
-        const MwVariable *v = &m->variables[vUnknown_ref[i]];
-        if (v->kind == MW_KIND_DERIVATIVE) {
-            dvUnknown[i] = inst->dxdot[v->index];
-        } else if (v->kind == MW_KIND_OUTPUT) {
-            dvUnknown[i] = inst->dy[v->index];
-        } else {
-            dvUnknown[i] = inst->dx[v->index];
-        }
-    }
+    for (i = 0; i < nUnknown; i++) dvUnknown[i] = mw_sensitivity(inst, &m->variables[vUnknown_ref[i]], 0);
     return non_finite(inst, fn, "the directional derivatives", dvUnknown, nUnknown);
 }
 

@@ -39,6 +39,8 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
         work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->ode_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->events, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->update, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
@@ -55,8 +57,9 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
 
     name_len = strlen(name);
     inst->name = (char *)host->alloc(name_len + 1, sizeof(char));
-    /* x, u, p, m, xdot, y; x_save, x_stage, k1..k4; m_save, z0, z1, next; dx, du, dp, dxdot, dy; w */
-    n_doubles = (nx + nu + np + nz + nx + ny) + 6 * nx + (4 * nz + nx) + (nx + nu + np + nx + ny) + (size_t)sz_w;
+    /* x, u, p, m, xdot, y, z; x_save, x_stage, k1..k4; m_save, z0, z1, next; dx, du, dp, dxdot, dy, adj; w */
+    n_doubles = (nx + nu + np + nz + nx + ny + nz) + 6 * nx + (4 * nz + nx) + (nx + nu + np + nx + ny) +
+                (nx + nu + np) + (size_t)sz_w;
     inst->block = (double *)host->alloc(at_least_one(n_doubles), sizeof(double));
     inst->arg = (const double **)host->alloc((size_t)sz_arg, sizeof(const double *));
     inst->res = (double **)host->alloc((size_t)sz_res, sizeof(double *));
@@ -74,6 +77,7 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     inst->m = d; d += nz;
     inst->xdot = d; d += nx;
     inst->y = d; d += ny;
+    inst->z = d; d += nz;
     inst->x_save = d; d += nx;
     inst->x_stage = d; d += nx;
     inst->k1 = d; d += nx;
@@ -89,6 +93,7 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     inst->dp = d; d += np;
     inst->dxdot = d; d += nx;
     inst->dy = d; d += ny;
+    inst->adj = d; d += nx + nu + np;
     inst->w = d;
 
     inst->log_mask = (1u << MW_LOG_WARNING) | (1u << MW_LOG_DISCARD) | (1u << MW_LOG_ERROR) | (1u << MW_LOG_FATAL);
@@ -115,6 +120,7 @@ void mw_instance_free(MwInstance *inst) {
 void mw_invalidate(MwInstance *inst) {
     inst->xdot_valid = 0;
     inst->y_valid = 0;
+    inst->z_valid = 0;
 }
 
 void mw_set_start_values(MwInstance *inst) {
@@ -220,6 +226,95 @@ int mw_update_outputs(MwInstance *inst) {
     inst->res[0] = inst->y;
     if (inst->model->out.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
     inst->y_valid = 1;
+    return 0;
+}
+
+int mw_update_indicators(MwInstance *inst) {
+    if (inst->z_valid) return 0;
+    if (mw_events(inst, inst->x, inst->z) != 0) return -1;
+    inst->z_valid = 1;
+    return 0;
+}
+
+int mw_prepare(MwInstance *inst, const MwVariable *v) {
+    switch ((MwKind)v->kind) {
+    case MW_KIND_DERIVATIVE: return mw_update_derivatives(inst);
+    case MW_KIND_OUTPUT: return mw_update_outputs(inst);
+    case MW_KIND_INDICATOR: return mw_update_indicators(inst);
+    default: return 0;
+    }
+}
+
+double mw_value(const MwInstance *inst, const MwVariable *v) {
+    switch ((MwKind)v->kind) {
+    case MW_KIND_STATE: return inst->x[v->index];
+    case MW_KIND_DERIVATIVE: return inst->xdot[v->index];
+    case MW_KIND_INPUT: return inst->u[v->index];
+    case MW_KIND_PARAMETER: return inst->p[v->index];
+    case MW_KIND_OUTPUT: return inst->y[v->index];
+    case MW_KIND_STEP: return inst->h_int;
+    case MW_KIND_INDICATOR: return inst->z[v->index];
+    default: return NAN;
+    }
+}
+
+int mw_assign(MwInstance *inst, const MwVariable *v, double value) {
+    switch ((MwKind)v->kind) {
+    case MW_KIND_STATE: inst->x[v->index] = value; break;
+    case MW_KIND_INPUT: inst->u[v->index] = value; break;
+    case MW_KIND_PARAMETER: inst->p[v->index] = value; break;
+    case MW_KIND_STEP: inst->h_int = value; break;
+    default: return -1;
+    }
+    mw_invalidate(inst);
+    return 0;
+}
+
+void mw_clear_seeds(MwInstance *inst) {
+    const MwModel *m = inst->model;
+    if (m->nx > 0) memset(inst->dx, 0, m->nx * sizeof(double));
+    if (m->nu > 0) memset(inst->du, 0, m->nu * sizeof(double));
+    if (m->np > 0) memset(inst->dp, 0, m->np * sizeof(double));
+    if (m->nx > 0) memset(inst->dxdot, 0, m->nx * sizeof(double));
+    if (m->ny > 0) memset(inst->dy, 0, m->ny * sizeof(double));
+}
+
+int mw_seed(MwInstance *inst, const MwVariable *v, double seed, int reverse) {
+    switch ((MwKind)v->kind) {
+    case MW_KIND_STATE: inst->dx[v->index] += seed; return 0; /* a known, or an unknown equal to itself */
+    case MW_KIND_INPUT: if (reverse) return -1; inst->du[v->index] += seed; return 0;
+    case MW_KIND_PARAMETER: if (reverse) return -1; inst->dp[v->index] += seed; return 0;
+    case MW_KIND_DERIVATIVE: if (!reverse) return -1; inst->dxdot[v->index] += seed; return 0;
+    case MW_KIND_OUTPUT: if (!reverse) return -1; inst->dy[v->index] += seed; return 0;
+    default: return -1;
+    }
+}
+
+double mw_sensitivity(const MwInstance *inst, const MwVariable *v, int reverse) {
+    switch ((MwKind)v->kind) {
+    case MW_KIND_STATE: return inst->dx[v->index];
+    case MW_KIND_INPUT: return reverse ? inst->du[v->index] : NAN;
+    case MW_KIND_PARAMETER: return reverse ? inst->dp[v->index] : NAN;
+    case MW_KIND_DERIVATIVE: return reverse ? NAN : inst->dxdot[v->index];
+    case MW_KIND_OUTPUT: return reverse ? NAN : inst->dy[v->index];
+    default: return NAN;
+    }
+}
+
+int mw_adjoint(MwInstance *inst, int need_ode, int need_out) {
+    const MwModel *m = inst->model;
+    size_t i, nx = m->nx, nu = m->nu, np = m->np;
+    int pass;
+    for (pass = 0; pass < 2; pass++) {
+        if (pass == 0 ? !need_ode : !need_out) continue;
+        set_args(inst, inst->x);
+        inst->arg[4] = pass == 0 ? inst->dxdot : inst->dy;
+        inst->res[0] = inst->adj;
+        if ((pass == 0 ? m->ode_adj : m->out_adj).eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+        for (i = 0; i < nx; i++) inst->dx[i] += inst->adj[i];
+        for (i = 0; i < nu; i++) inst->du[i] += inst->adj[nx + i];
+        for (i = 0; i < np; i++) inst->dp[i] += inst->adj[nx + nu + i];
+    }
     return 0;
 }
 

@@ -83,16 +83,16 @@ struct MwInstance {
     /* every FMU state taken from this instance and not yet freed, freed with the instance */
     MwSnapshot *snapshots;
 
-    /* model vectors; m: the discrete modes */
-    double *x, *u, *p, *m, *xdot, *y;
-    int xdot_valid, y_valid;
+    /* model vectors; m: the discrete modes, z: the event indicators */
+    double *x, *u, *p, *m, *xdot, *y, *z;
+    int xdot_valid, y_valid, z_valid;
 
     /* integrator and event scratch */
     double *x_save, *x_stage, *k1, *k2, *k3, *k4;
     double *m_save, *z0, *z1, *next; /* nz, nz, nz, nz + nx */
 
-    /* directional-derivative scratch */
-    double *dx, *du, *dp, *dxdot, *dy;
+    /* directional-derivative scratch; adjoint: seeds in dxdot and dy, sensitivities into dx, du, dp */
+    double *dx, *du, *dp, *dxdot, *dy, *adj; /* adj: nx + nu + np */
 
     /* CasADi work buffers, sized for the largest of the model's functions */
     const double **arg;
@@ -128,6 +128,14 @@ struct MwSnapshot {
 #define mw_settle_modes MW_SYMBOL(mw_settle_modes)
 #define mw_start_modes MW_SYMBOL(mw_start_modes)
 #define mw_directional MW_SYMBOL(mw_directional)
+#define mw_adjoint MW_SYMBOL(mw_adjoint)
+#define mw_update_indicators MW_SYMBOL(mw_update_indicators)
+#define mw_prepare MW_SYMBOL(mw_prepare)
+#define mw_value MW_SYMBOL(mw_value)
+#define mw_assign MW_SYMBOL(mw_assign)
+#define mw_clear_seeds MW_SYMBOL(mw_clear_seeds)
+#define mw_seed MW_SYMBOL(mw_seed)
+#define mw_sensitivity MW_SYMBOL(mw_sensitivity)
 #define mw_snapshot_new MW_SYMBOL(mw_snapshot_new)
 #define mw_snapshot_find MW_SYMBOL(mw_snapshot_find)
 #define mw_snapshot_free MW_SYMBOL(mw_snapshot_free)
@@ -157,6 +165,13 @@ MW_HIDDEN MwStatus mw_set_logging(MwInstance *inst, const char *fn, int on, size
 /* 0 on success; -1 if CasADi reported an error. */
 MW_HIDDEN int mw_update_derivatives(MwInstance *inst);
 MW_HIDDEN int mw_update_outputs(MwInstance *inst);
+MW_HIDDEN int mw_update_indicators(MwInstance *inst);
+/* Evaluate what reading variable v needs (derivatives, outputs, indicators): 0, or -1 naming nothing. */
+MW_HIDDEN int mw_prepare(MwInstance *inst, const MwVariable *v);
+/* The value of variable v (after mw_prepare). */
+MW_HIDDEN double mw_value(const MwInstance *inst, const MwVariable *v);
+/* Set variable v (a state, input, parameter or the step); 0, or -1 if v is not settable by kind. */
+MW_HIDDEN int mw_assign(MwInstance *inst, const MwVariable *v, double value);
 MW_HIDDEN int mw_all_finite(const double *v, size_t n);
 
 /*
@@ -184,6 +199,20 @@ MW_HIDDEN int mw_start_modes(MwInstance *inst);
 
 /* Forward-mode derivatives: seeds dx, du, dp must be filled; 0 on success. */
 MW_HIDDEN int mw_directional(MwInstance *inst, int need_dxdot, int need_dy);
+/* Zero the seeds of forward (dx, du, dp) and reverse mode (dxdot, dy). */
+MW_HIDDEN void mw_clear_seeds(MwInstance *inst);
+/*
+ * Add a seed: forward mode (reverse = 0) seeds a known (state, input, parameter); reverse mode
+ * seeds an unknown (derivative, output, state). 0, or -1 if v cannot take that role.
+ */
+MW_HIDDEN int mw_seed(MwInstance *inst, const MwVariable *v, double seed, int reverse);
+/* After mw_directional: the derivative of unknown v; after mw_adjoint: the sensitivity of known v. */
+MW_HIDDEN double mw_sensitivity(const MwInstance *inst, const MwVariable *v, int reverse);
+/*
+ * Reverse mode: [dx; du; dp] = J_ode^T dxdot + J_out^T dy (+ the seeds of unknown states, already in
+ * dx); 0 on success.
+ */
+MW_HIDDEN int mw_adjoint(MwInstance *inst, int need_ode, int need_out);
 
 /* A new FMU state, linked into the instance's list; NULL when out of memory. */
 MW_HIDDEN MwSnapshot *mw_snapshot_new(MwInstance *inst);

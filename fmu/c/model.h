@@ -1,19 +1,21 @@
 /*
- * The narrow contract between the FMI 2.0 wrapper (written once, fmi2_functions.c
- * and instance.c) and one exported model (generated per robot: model_data.c and
+ * The narrow contract between the FMI wrappers (written once: instance.c, with
+ * fmi2_functions.c for FMI 2.0 and fmi3_functions.c for FMI 3.0) and one exported model (generated per robot: model_data.c and
  * the CasADi code it points to).
  *
  * A model is a continuous-time system with nz discrete modes m (the friction
  * mode of each joint; nz may be 0)
  *     xdot = ode(x, u, p, m),   y = out(x, u, p, m),   z = events(x, u, p, m)
  * with nx states, nu inputs, np parameters and ny outputs, plus the forward
- * directional derivatives of ode and out (m held). The nz event indicators z
+ * directional derivatives of ode and out and their reverse-mode (adjoint)
+ * products (m held). The nz event indicators z
  * are positive while the modes are valid. At an event, update(x, u, p, m)
  * gives the next modes and states (one pass; the wrapper repeats it until
  * nothing changes); start(x, u, p) gives the modes to begin from. Every FMI
  * variable is one row of a table indexed by its value reference; a row says
- * which vector the variable lives in (kind) and where (index). The wrapper
- * never knows what the model is.
+ * which vector the variable lives in (kind) and where (index). FMI 3.0 groups
+ * consecutive rows into array variables (arrays[], one value reference each);
+ * FMI 2.0 exposes the rows themselves. The wrapper never knows what the model is.
  */
 #ifndef MW_MODEL_H
 #define MW_MODEL_H
@@ -60,7 +62,8 @@ typedef enum {
     MW_KIND_INPUT = 2,      /* u[index] */
     MW_KIND_PARAMETER = 3,  /* p[index] */
     MW_KIND_OUTPUT = 4,     /* y[index] = out(x, u, p)[index] */
-    MW_KIND_STEP = 5        /* the co-simulation internal step, a fixed parameter */
+    MW_KIND_STEP = 5,       /* the co-simulation internal step, a fixed parameter */
+    MW_KIND_INDICATOR = 6   /* z[index] = events(x, u, p, m)[index], an event indicator */
 } MwKind;
 
 /* When a variable may be set (FMI 2.0 causality/variability/initial). */
@@ -82,6 +85,14 @@ typedef struct {
     double max;
 } MwVariable;
 
+/* An FMI 3.0 variable: rows first .. first + count - 1 of the table (count 1: a scalar). */
+typedef struct {
+    const char *name;
+    unsigned int first;
+    unsigned int count;
+    unsigned int scalar; /* 1: no <Dimension>, a scalar variable */
+} MwArray;
+
 typedef struct {
     const char *model_identifier;
     const char *guid;
@@ -89,6 +100,8 @@ typedef struct {
     size_t nz;                    /* discrete modes = event indicators */
     size_t nvars;                 /* rows of variables[], value references 0..nvars-1 */
     const MwVariable *variables;
+    size_t narrays;               /* FMI 3.0 variables, value references 0..narrays-1 */
+    const MwArray *arrays;
     const double *x_start;        /* nx */
     const double *x_nominal;      /* nx */
     const double *u_start;        /* nu */
@@ -98,6 +111,8 @@ typedef struct {
     MwFunction out;               /* (x, u, p, m) -> y */
     MwFunction ode_dir;           /* (x, u, p, m, dx, du, dp) -> dxdot, forward mode */
     MwFunction out_dir;           /* (x, u, p, m, dx, du, dp) -> dy, forward mode */
+    MwFunction ode_adj;           /* (x, u, p, m, wxdot) -> [ax; au; ap] = J_ode^T wxdot, reverse mode */
+    MwFunction out_adj;           /* (x, u, p, m, wy) -> [ax; au; ap] = J_out^T wy, reverse mode */
     MwFunction events;            /* (x, u, p, m) -> z, nz indicators, > 0 while the modes hold */
     MwFunction update;            /* (x, u, p, m) -> (m_next, x_next): one pass of the mode update */
     MwFunction start;             /* (x, u, p) -> m: the modes to begin from */
