@@ -346,3 +346,22 @@ def test_bad_calls_return_errors_with_a_message():
     with pytest.raises(Exception, match="instantiate"):
         s2.instantiate(logMessage=log)
     assert "instantiationToken" in messages[-1]
+
+
+def test_cli_exports_and_validates_an_fmi3_fmu(tmp_path):
+    import subprocess
+    import sys
+
+    manip = Path(sys.executable).with_name("manip")
+    out = tmp_path / "scara3.fmu"
+    proc = subprocess.run([str(manip), "export-fmu", "scara", "-o", str(out), "--fmi-version", "3"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert _md(out).fmiVersion == "3.0"
+    proc = subprocess.run([str(manip), "validate-fmu", str(out), "--horizon", "0.5", "--no-cosim"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "result: OK" in proc.stdout and "Model Exchange q" in proc.stdout
+    proc = subprocess.run([str(manip), "export-fmu", "scara", "-o", str(out), "--fmi-version", "4"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "--fmi-version" in proc.stderr

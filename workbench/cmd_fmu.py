@@ -24,7 +24,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from fmu.build import export_fmu
 
     out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
-    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, progress=print)
+    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model,
+                      fmi_version=args.fmi_version, progress=print)
     print(f"wrote {path}")
     return 0
 
@@ -39,13 +40,17 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``export-fmu`` and ``validate-fmu`` to the CLI's sub-command parsers."""
-    p = subparsers.add_parser("export-fmu", help="export a robot as an FMI 2.0 FMU (Model Exchange and Co-Simulation)")
+    p = subparsers.add_parser("export-fmu", help="export a robot as an FMI 2.0 or 3.0 FMU (Model Exchange and "
+                                                 "Co-Simulation)")
     p.add_argument("robot", help="built-in name or TOML file")
     p.add_argument("-o", "--output", required=True, metavar="FILE.fmu", help="the FMU to write")
     p.add_argument("--step", type=_internal_step, default=1e-3, metavar="H",
                    help="internal step of the co-simulation integrator (RK4), s (default 0.001, at least 1e-6)")
     p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected",
                    help="motor model of the dynamics (default reflected)")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help="FMI version: 2 (scalar variables, binaries/linux64) or 3 (array variables q, qd, tau_m, "
+                        "adjoint derivatives, binaries/x86_64-linux); default 2")
     p.set_defaults(func=_cmd_export)
 
     p = subparsers.add_parser("validate-fmu", help="validate an FMU: description, binary, FMPy (CS and ME), "
