@@ -365,3 +365,34 @@ def test_cli_exports_and_validates_an_fmi3_fmu(tmp_path):
     proc = subprocess.run([str(manip), "export-fmu", "scara", "-o", str(out), "--fmi-version", "4"],
                           capture_output=True, text=True)
     assert proc.returncode == 2 and "--fmi-version" in proc.stderr
+
+
+def test_fmi3_lifecycle_under_valgrind():
+    """fmu/c/fmu3_driver.c runs 20 repetitions of a CS and an ME lifecycle of the SCARA FMU (about 10 s)."""
+    import re
+    import shutil
+    import subprocess
+
+    from fmu.build import build_driver
+
+    driver = build_driver(build_root() / "fmu3_driver", fmi_version=3)
+    path = fmu_of("scara", 3)
+    md = _md(path)
+    from fmpy import extract
+
+    unzip = Path(extract(str(path)))
+    lib = unzip / "binaries" / "x86_64-linux" / "scara.so"
+    args = [str(driver), "soak", str(lib), md.guid, "8", "20",
+            *[str(_vr(md, nm)) for nm in ("q", "qd", "tau_m", "der(q)")], "4"]
+    proc = subprocess.run(args, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    valgrind = shutil.which("valgrind")
+    assert valgrind is not None, "valgrind is required for this test (apt-get install valgrind)"
+    proc = subprocess.run([valgrind, "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
+                           "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=1", *args],
+                          capture_output=True, text=True, timeout=300)
+    report = proc.stderr
+    assert proc.returncode == 0, report[-3000:]
+    assert "soak: 20 repetitions, 0 failures" in proc.stdout
+    assert re.search(r"ERROR SUMMARY: 0 errors from 0 contexts", report)
+    shutil.rmtree(unzip, ignore_errors=True)
