@@ -281,18 +281,28 @@ def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
     from .friction_modes import no_modes
 
     fid = spec.model_identifier
-    modes = spec.modes if spec.modes is not None else no_modes(spec.ode)
     x = ca.SX.sym("x", spec.ode.numel_in(0))
     u = ca.SX.sym("u", spec.ode.numel_in(1))
     p = ca.SX.sym("p", spec.ode.numel_in(2))
+    nd = len(spec.discrete.states) if spec.discrete is not None else 0
+    d = ca.SX.sym("d", nd)
+    if spec.discrete is not None:  # no friction modes (ModelSpec checks it): only the empty mode functions are used
+        modes = no_modes(ca.Function("ode", [x, u, p], [ca.SX.zeros(x.numel())]))
+    else:
+        modes = spec.modes if spec.modes is not None else no_modes(spec.ode)
     m = ca.SX.sym("m", modes.nz)
     dx, du, dp = ca.SX.sym("dx", x.numel()), ca.SX.sym("du", u.numel()), ca.SX.sym("dp", p.numel())
-    xdot = modes.ode(x, u, p, m)
-    y = spec.out(x, u, p)
+    if spec.discrete is not None:
+        xdot, y = spec.ode(x, u, p, d), spec.out(x, u, p, d)
+        d_next = spec.discrete.tick(x, u, p, d)
+    else:
+        xdot, y = modes.ode(x, u, p, m), spec.out(x, u, p)
+        d_next = ca.SX(0, 1)
     wxdot, wy = ca.SX.sym("wxdot", xdot.numel()), ca.SX.sym("wy", y.numel())
     z, dz = ca.vertcat(x, u, p), ca.vertcat(dx, du, dp)
     m_next, x_next = modes.update(x, u, p, m)
-    args, names = [x, u, p, m], ["x", "u", "p", "m"]
+    # ode, out and their derivatives take (x, u, p, m, d); the mode functions (x, u, p, m)
+    args, names = [x, u, p, m, d], ["x", "u", "p", "m", "d"]
     functions = [
         ca.Function(f"{fid}_ode", args, [xdot], names, ["xdot"]),
         ca.Function(f"{fid}_out", args, [y], names, ["y"]),
@@ -303,9 +313,10 @@ def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
         ca.Function(f"{fid}_ode_adj", args + [wxdot], [ca.jtimes(xdot, z, wxdot, True)], names + ["wxdot"],
                     ["a"]),
         ca.Function(f"{fid}_out_adj", args + [wy], [ca.jtimes(y, z, wy, True)], names + ["wy"], ["a"]),
-        ca.Function(f"{fid}_events", args, [modes.events(x, u, p, m)], names, ["z"]),
-        ca.Function(f"{fid}_update", args, [m_next, x_next], names, ["m_next", "x_next"]),
+        ca.Function(f"{fid}_events", args[:4], [modes.events(x, u, p, m)], names[:4], ["z"]),
+        ca.Function(f"{fid}_update", args[:4], [m_next, x_next], names[:4], ["m_next", "x_next"]),
         ca.Function(f"{fid}_start", [x, u, p], [modes.start(x, u, p)], ["x", "u", "p"], ["m"]),
+        ca.Function(f"{fid}_tick", [x, u, p, d], [d_next], ["x", "u", "p", "d"], ["d_next"]),
     ]
     stamp = (f"/* {STAMP}: CasADi code of the model {fid} (ode, out, their forward-mode\n"
              f" * directional derivatives and reverse-mode products), written by fmu/build.py. The\n"

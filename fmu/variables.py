@@ -42,6 +42,7 @@ __all__ = [
     "substeps",
     "Quantity",
     "ModelSpec",
+    "DiscreteStates",
     "Variable",
     "Unknown",
     "VariableTable",
@@ -102,6 +103,30 @@ class Quantity:
 
 
 @dataclass(frozen=True)
+class DiscreteStates:
+    """Sampled discrete states ``d`` of a model: ``d <- tick(x, u, p, d)`` once per ``period`` s.
+
+    The tick runs at the start of every period with the inputs held over it (zero-order hold), as a
+    digital controller updates its integrator after computing its output; ``d`` is never iterated
+    at events (unlike the friction modes). A model with sampled states is Co-Simulation only.
+    """
+
+    states: tuple[Quantity, ...]
+    start: np.ndarray
+    period: float
+    tick: ca.Function  # (x, u, p, d) -> d_next
+
+    def __post_init__(self) -> None:
+        nd = len(self.states)
+        if np.shape(self.start) != (nd,) or not np.all(np.isfinite(self.start)):
+            raise ValueError(f"discrete.start: expected {nd} finite values, got {np.asarray(self.start).tolist()}")
+        if not (math.isfinite(self.period) and self.period > 0):
+            raise ValueError(f"discrete.period: expected a positive sample period in s, got {self.period!r}")
+        if self.tick.n_in() != 4 or self.tick.numel_in(3) != nd or self.tick.numel_out(0) != nd:
+            raise ValueError(f"discrete.tick: expected (x, u, p, d) -> d_next with {nd} sampled states")
+
+
+@dataclass(frozen=True)
 class ModelSpec:
     """What an FMU is built from.
 
@@ -110,6 +135,7 @@ class ModelSpec:
     u, p and y. ``output_state[k]`` is the index of the state that output k
     equals (such outputs are exposed as the state variable itself), or -1.
     ``step`` is the default internal step of the co-simulation integrator.
+    With ``discrete`` (:class:`DiscreteStates`), ``ode`` and ``out`` take a fourth input ``d``.
     """
 
     model_identifier: str
@@ -134,6 +160,7 @@ class ModelSpec:
     robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
     robot_json: str = ""    # the whole description (fmu.robot_resource), shipped as resources/robot.json
     modes: Any = None       # fmu.friction_modes.FrictionModes of the stick-slip friction, or None (no modes)
+    discrete: DiscreteStates | None = None  # sampled discrete states (a digital controller's integrator), or None
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
@@ -145,6 +172,12 @@ class ModelSpec:
         for key in expected:
             if got[key] != expected[key]:
                 raise ValueError(f"{key}: expected sizes (x, u, p) = {expected[key]}, got {got[key]}")
+        n_in = 4 if self.discrete is not None else 3
+        if self.ode.n_in() != n_in or self.out.n_in() != n_in:
+            raise ValueError(f"ode, out: expected {n_in} inputs (x, u, p{', d' if n_in == 4 else ''}), got "
+                             f"{self.ode.n_in()} and {self.out.n_in()}")
+        if self.discrete is not None and self.modes is not None:
+            raise ValueError("discrete: a model with sampled states has no friction modes")
         if self.ode.numel_out(0) != nx:
             raise ValueError(f"ode output: expected {nx} entries, got {self.ode.numel_out(0)}")
         if self.out.numel_out(0) != ny:
@@ -295,7 +328,10 @@ class VariableTable:
             "guid": quoteattr(guid),
             "description": quoteattr(spec.description),
             "generation_tool": quoteattr(f"manipulator-workbench {version}"),
-            "source_files": files,
+            "model_exchange": "" if spec.discrete is not None else (
+                f"  <ModelExchange\n    modelIdentifier={quoteattr(spec.model_identifier)}\n"
+                '    canGetAndSetFMUState="true"\n    canSerializeFMUState="true"\n'
+                '    providesDirectionalDerivatives="true"\n    providesAdjointDerivatives="true"/>\n'),
             "unit_definitions": self._unit_definitions(),
             "stop_time": _xml_number(spec.stop_time),
             "step_size": _xml_number(spec.step),
@@ -352,6 +388,11 @@ class VariableTable:
             "unit_definitions": self._unit_definitions(),
             "stop_time": _xml_number(spec.stop_time),
             "event_indicators": str(spec.modes.nz if spec.modes is not None else 0),
+            "model_exchange": "" if spec.discrete is not None else (
+                f"  <ModelExchange\n    modelIdentifier={quoteattr(spec.model_identifier)}\n"
+                '    canGetAndSetFMUstate="true"\n    canSerializeFMUstate="true"\n'
+                f'    providesDirectionalDerivative="true">\n    <SourceFiles>\n{files}\n    </SourceFiles>\n'
+                "  </ModelExchange>\n"),
             "step_size": _xml_number(spec.step),
             "vendor_annotations": self._vendor_annotations(),
             "model_variables": "\n".join(self._scalar_variable(v) for v in self.variables),
@@ -371,6 +412,7 @@ class VariableTable:
             model_identifier_string=_c_string(spec.model_identifier),
             nx=len(spec.states), nu=len(spec.inputs), np=len(spec.params), ny=len(spec.outputs),
             nz=spec.modes.nz if spec.modes is not None else 0,
+            nd=len(spec.discrete.states) if spec.discrete is not None else 0,
             nvars=len(self.variables),
             narrays=len(self.arrays()),
             value_references=macros,
@@ -381,7 +423,7 @@ class VariableTable:
         spec = self.spec
         kinds = {"state": "MW_KIND_STATE", "derivative": "MW_KIND_DERIVATIVE", "input": "MW_KIND_INPUT",
                  "parameter": "MW_KIND_PARAMETER", "output": "MW_KIND_OUTPUT", "step": "MW_KIND_STEP",
-                 "indicator": "MW_KIND_INDICATOR"}
+                 "indicator": "MW_KIND_INDICATOR", "discrete": "MW_KIND_DISCRETE"}
         settable = {"never": "MW_SET_NEVER", "initial": "MW_SET_INITIAL", "tunable": "MW_SET_TUNABLE",
                     "input": "MW_SET_INPUT", "state": "MW_SET_STATE"}
         rows = []
@@ -401,7 +443,9 @@ class VariableTable:
             p_start=_c_array(spec.p_start),
             step_start=_c_number(spec.step),
             ode=f"{fid}_ode", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
-            ode_adj=f"{fid}_ode_adj", out_adj=f"{fid}_out_adj",
+            ode_adj=f"{fid}_ode_adj", out_adj=f"{fid}_out_adj", tick=f"{fid}_tick",
+            d_start=_c_array(spec.discrete.start if spec.discrete is not None else np.zeros(0)),
+            sample_period=_c_number(spec.discrete.period if spec.discrete is not None else 0.0),
             events=f"{fid}_events", update=f"{fid}_update", start=f"{fid}_start",
         )
 
@@ -560,6 +604,11 @@ def build_table(spec: ModelSpec) -> VariableTable:
             variability="continuous", initial="calculated", start=None, unit="",
             description=f"event indicator of joint {i + 1}'s friction mode: positive while the mode holds",
             settable="never")
+
+    if spec.discrete is not None:
+        for i, q in enumerate(spec.discrete.states):
+            add(name=q.name, kind="discrete", index=i, causality="local", variability="discrete", initial="exact",
+                start=float(spec.discrete.start[i]), unit=q.unit, description=q.description, settable="initial")
 
     names = [v.name for v in variables]
     duplicates = sorted({n for n in names if names.count(n) > 1})

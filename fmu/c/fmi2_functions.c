@@ -137,16 +137,6 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     return (fmi2Status)mw_set_logging(inst, "fmi2SetDebugLogging", loggingOn, nCategories, categories);
 }
 
-/* Times within a relative 1e-12 (absolute near 0) count as equal, as floating-point sums of steps differ. */
-static int is_close(double a, double b) {
-    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
-    return fabs(a - b) <= 1e-12 * (scale > 1.0 ? scale : 1.0);
-}
-
-/* Whether t is past the stopTime given to fmi2SetupExperiment (FMI 2.0, 2.1.6), rounding forgiven. */
-static int past_stop_time(const MwInstance *inst, double t) {
-    return inst->stop_time_defined && t > inst->stop_time && !is_close(t, inst->stop_time);
-}
 
 /* A non-finite computed value: logged, and the call returns fmi2Discard (the one policy). */
 static fmi2Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
@@ -198,6 +188,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation) {
         log_before_instance(functions, instanceName, "fmi2Instantiate: fmuType is neither fmi2ModelExchange nor fmi2CoSimulation");
+        return NULL;
+    }
+    if (fmuType == fmi2ModelExchange && model->nd > 0) {
+        log_before_instance(functions, instanceName,
+                            "fmi2Instantiate: this model has sampled discrete states (a digital controller): it is "
+                            "Co-Simulation only, the modelDescription.xml has no ModelExchange");
         return NULL;
     }
     if (fmuGUID == NULL || strcmp(fmuGUID, model->guid) != 0) {
@@ -567,7 +563,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
     char what[192];
     ENTER(CompletedIntegratorStep, FOR_ME, MODES_CompletedIntegratorStep);
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (past_stop_time(inst, inst->time)) {
+    if (mw_past_stop_time(inst, inst->time)) {
         snprintf(what, sizeof(what), "an integrator step completed at t = %.17g, past the stopTime %.17g of "
                  "fmi2SetupExperiment", inst->time, inst->stop_time);
         return fail(inst, "fmi2CompletedIntegratorStep", what);
@@ -587,13 +583,13 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     /* Past stopTime: an error in event mode. In continuous-time mode an integrator may try points past
        it inside a step that it then interpolates back (CVode does); the step is refused only if it is
        accepted there (fmi2CompletedIntegratorStep). */
-    if (inst->mode == MW_MODE_EVENT && past_stop_time(inst, time)) {
+    if (inst->mode == MW_MODE_EVENT && mw_past_stop_time(inst, time)) {
         snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g of fmi2SetupExperiment", time,
                  inst->stop_time);
         return fail(inst, "fmi2SetTime", what);
     }
     /* in event mode time stands still or moves on to the event; it never goes back */
-    if (inst->mode == MW_MODE_EVENT && time < inst->time && !is_close(time, inst->time)) {
+    if (inst->mode == MW_MODE_EVENT && time < inst->time && !mw_is_close(time, inst->time)) {
         snprintf(what, sizeof(what), "time %.17g is before the current time %.17g: in event mode time may not go back",
                  time, inst->time);
         return fail(inst, "fmi2SetTime", what);
@@ -692,37 +688,15 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     const char *fn = "fmi2DoStep";
     fmi2Status status;
     char what[256];
-    double tol, next;
-    unsigned long long n;
+    const char *problem;
+    unsigned long long ticks = 1, n = 1;
     ENTER(DoStep, FOR_CS, MODES_DoStep);
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
-    if (!isfinite(currentCommunicationPoint)) return fail(inst, fn, "currentCommunicationPoint is not finite");
-    if (!(communicationStepSize > 0.0) || !isfinite(communicationStepSize)) {
-        snprintf(what, sizeof(what), "communicationStepSize %g must be positive and finite", communicationStepSize);
-        return fail(inst, fn, what);
-    }
-    tol = 1e-9 * (fabs(inst->time) > 1.0 ? fabs(inst->time) : 1.0);
-    if (fabs(currentCommunicationPoint - inst->time) > tol) {
-        snprintf(what, sizeof(what), "currentCommunicationPoint %.17g differs from the FMU time %.17g",
-                 currentCommunicationPoint, inst->time);
-        return fail(inst, fn, what);
-    }
-    next = currentCommunicationPoint + communicationStepSize;
-    if (past_stop_time(inst, next)) {
-        snprintf(what, sizeof(what), "a step from %.17g of %.17g s ends past the stopTime %.17g of fmi2SetupExperiment",
-                 currentCommunicationPoint, communicationStepSize, inst->stop_time);
-        return fail(inst, fn, what);
-    }
-    n = mw_substeps(communicationStepSize, inst->h_int);
-    if (n == 0) {
-        snprintf(what, sizeof(what), "communicationStepSize %g needs more than %llu sub-steps of internal_step %g s, "
-                 "the most one call takes: use shorter communication steps or a longer internal_step",
-                 communicationStepSize, MW_MAX_SUBSTEPS, inst->h_int);
-        return fail(inst, fn, what);
-    }
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s", fn,
-           currentCommunicationPoint, n, communicationStepSize / (double)n);
-    status = (fmi2Status)mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, n);
+    problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
+    if (problem != NULL) return fail(inst, fn, problem);
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sample periods of %llu sub-steps of %.17g s", fn,
+           currentCommunicationPoint, ticks, n, communicationStepSize / (double)(ticks * n));
+    status = (fmi2Status)mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
     if (status == fmi2Discard) {
         inst->mode = MW_MODE_STEP_FAILED;
     } else if (status == fmi2Error) {

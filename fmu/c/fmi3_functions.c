@@ -131,15 +131,6 @@ static fmi3Status non_finite(MwInstance *inst, const char *fn, const char *what,
     return fmi3Discard;
 }
 
-/* Times within a relative 1e-12 (absolute near 0) count as equal, as floating-point sums of steps differ. */
-static int is_close(double a, double b) {
-    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
-    return fabs(a - b) <= 1e-12 * (scale > 1.0 ? scale : 1.0);
-}
-
-static int past_stop_time(const MwInstance *inst, double t) {
-    return inst->stop_time_defined && t > inst->stop_time && !is_close(t, inst->stop_time);
-}
 
 /* The array behind a value reference other than time, or NULL after logging the error. */
 static const MwArray *lookup(MwInstance *inst, const char *fn, fmi3ValueReference vr) {
@@ -213,6 +204,12 @@ static fmi3Instance instantiate(const char *fn, MwInterface type, fmi3String ins
     if (instantiationToken == NULL || strcmp(instantiationToken, model->guid) != 0) {
         snprintf(message, sizeof(message),
                  "%s: wrong instantiationToken: it does not match the modelDescription.xml of this binary", fn);
+        refuse(env, logMessage, instanceName, message);
+        return NULL;
+    }
+    if (type == MW_MODEL_EXCHANGE && model->nd > 0) {
+        snprintf(message, sizeof(message), "%s: this model has sampled discrete states (a digital controller): it "
+                 "is Co-Simulation only", fn);
         refuse(env, logMessage, instanceName, message);
         return NULL;
     }
@@ -845,7 +842,7 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
     if (null_arg(inst, fn, "enterEventMode", enterEventMode) ||
         null_arg(inst, fn, "terminateSimulation", terminateSimulation))
         return fmi3Error;
-    if (past_stop_time(inst, inst->time)) {
+    if (mw_past_stop_time(inst, inst->time)) {
         snprintf(what, sizeof(what), "an integrator step completed at t = %.17g, past the stopTime %.17g of "
                  "fmi3EnterInitializationMode", inst->time, inst->stop_time);
         return fail(inst, fn, what);
@@ -859,11 +856,11 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
     char what[192];
     ENTER(SetTime, FOR_ME, MODES_SetTime);
     if (!isfinite(time)) return fail(inst, "fmi3SetTime", "time is not finite");
-    if (inst->mode == MW_MODE_EVENT && past_stop_time(inst, time)) {
+    if (inst->mode == MW_MODE_EVENT && mw_past_stop_time(inst, time)) {
         snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g", time, inst->stop_time);
         return fail(inst, "fmi3SetTime", what);
     }
-    if (inst->mode == MW_MODE_EVENT && time < inst->time && !is_close(time, inst->time)) {
+    if (inst->mode == MW_MODE_EVENT && time < inst->time && !mw_is_close(time, inst->time)) {
         snprintf(what, sizeof(what), "time %.17g is before the current time %.17g: in Event Mode time may not go back",
                  time, inst->time);
         return fail(inst, "fmi3SetTime", what);
@@ -962,41 +959,19 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     const char *fn = "fmi3DoStep";
     MwStatus status;
     char what[256];
-    double tol, next;
-    unsigned long long n;
+    const char *problem;
+    unsigned long long ticks = 1, n = 1;
     ENTER(DoStep, FOR_CS, MODES_DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
     if (null_arg(inst, fn, "eventHandlingNeeded", eventHandlingNeeded) ||
         null_arg(inst, fn, "terminateSimulation", terminateSimulation) || null_arg(inst, fn, "earlyReturn", earlyReturn) ||
         null_arg(inst, fn, "lastSuccessfulTime", lastSuccessfulTime))
         return fmi3Error;
-    if (!isfinite(currentCommunicationPoint)) return fail(inst, fn, "currentCommunicationPoint is not finite");
-    if (!(communicationStepSize > 0.0) || !isfinite(communicationStepSize)) {
-        snprintf(what, sizeof(what), "communicationStepSize %g must be positive and finite", communicationStepSize);
-        return fail(inst, fn, what);
-    }
-    tol = 1e-9 * (fabs(inst->time) > 1.0 ? fabs(inst->time) : 1.0);
-    if (fabs(currentCommunicationPoint - inst->time) > tol) {
-        snprintf(what, sizeof(what), "currentCommunicationPoint %.17g differs from the FMU time %.17g",
-                 currentCommunicationPoint, inst->time);
-        return fail(inst, fn, what);
-    }
-    next = currentCommunicationPoint + communicationStepSize;
-    if (past_stop_time(inst, next)) {
-        snprintf(what, sizeof(what), "a step from %.17g of %.17g s ends past the stopTime %.17g",
-                 currentCommunicationPoint, communicationStepSize, inst->stop_time);
-        return fail(inst, fn, what);
-    }
-    n = mw_substeps(communicationStepSize, inst->h_int);
-    if (n == 0) {
-        snprintf(what, sizeof(what), "communicationStepSize %g needs more than %llu sub-steps of internal_step %g s, "
-                 "the most one call takes: use shorter communication steps or a longer internal_step",
-                 communicationStepSize, MW_MAX_SUBSTEPS, inst->h_int);
-        return fail(inst, fn, what);
-    }
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s", fn, currentCommunicationPoint,
-           n, communicationStepSize / (double)n);
-    status = mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, n);
+    problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
+    if (problem != NULL) return fail(inst, fn, problem);
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sample periods of %llu sub-steps of %.17g s", fn,
+           currentCommunicationPoint, ticks, n, communicationStepSize / (double)(ticks * n));
+    status = mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
     *eventHandlingNeeded = fmi3False;
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;

@@ -30,8 +30,8 @@ static int work_sizes(const MwFunction *f, mw_int *sz_arg, mw_int *sz_res, mw_in
 MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *name, const MwHost *host,
                             int logging_on) {
     MwInstance *inst;
-    mw_int sz_arg = 7, sz_res = 2, sz_iw = 0, sz_w = 0;
-    size_t nx = model->nx, nu = model->nu, np = model->np, ny = model->ny, nz = model->nz;
+    mw_int sz_arg = 8, sz_res = 2, sz_iw = 0, sz_w = 0;
+    size_t nx = model->nx, nu = model->nu, np = model->np, ny = model->ny, nz = model->nz, nd = model->nd;
     size_t n_doubles, name_len;
     double *d;
 
@@ -43,7 +43,8 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
         work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->events, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->update, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
+        work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->tick, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
         return NULL;
     }
     if (sz_arg < 0 || sz_res < 0 || sz_iw < 0 || sz_w < 0) return NULL;
@@ -57,8 +58,9 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
 
     name_len = strlen(name);
     inst->name = (char *)host->alloc(name_len + 1, sizeof(char));
-    /* x, u, p, m, xdot, y, z; x_save, x_stage, k1..k4; m_save, z0, z1, next; dx, du, dp, dxdot, dy, adj; w */
-    n_doubles = (nx + nu + np + nz + nx + ny + nz) + 6 * nx + (4 * nz + nx) + (nx + nu + np + nx + ny) +
+    /* x, u, p, m, xdot, y, z, d; x_save, x_stage, k1..k4; m_save, z0, z1, next; d_save, d_next;
+       dx, du, dp, dxdot, dy, adj; w */
+    n_doubles = (nx + nu + np + nz + nx + ny + nz + nd) + 6 * nx + (4 * nz + nx) + 2 * nd + (nx + nu + np + nx + ny) +
                 (nx + nu + np) + (size_t)sz_w;
     inst->block = (double *)host->alloc(at_least_one(n_doubles), sizeof(double));
     inst->arg = (const double **)host->alloc((size_t)sz_arg, sizeof(const double *));
@@ -78,6 +80,7 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     inst->xdot = d; d += nx;
     inst->y = d; d += ny;
     inst->z = d; d += nz;
+    inst->d = d; d += nd;
     inst->x_save = d; d += nx;
     inst->x_stage = d; d += nx;
     inst->k1 = d; d += nx;
@@ -88,6 +91,8 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     inst->z0 = d; d += nz;
     inst->z1 = d; d += nz;
     inst->next = d; d += nz + nx;
+    inst->d_save = d; d += nd;
+    inst->d_next = d; d += nd;
     inst->dx = d; d += nx;
     inst->du = d; d += nu;
     inst->dp = d; d += np;
@@ -129,6 +134,7 @@ void mw_set_start_values(MwInstance *inst) {
     if (m->nu > 0) memcpy(inst->u, m->u_start, m->nu * sizeof(double));
     if (m->np > 0) memcpy(inst->p, m->p_start, m->np * sizeof(double));
     if (m->nz > 0) memset(inst->m, 0, m->nz * sizeof(double));
+    if (m->nd > 0) memcpy(inst->d, m->d_start, m->nd * sizeof(double));
     inst->h_int = m->step_start;
     inst->time = 0.0;
     inst->last_successful_time = 0.0;
@@ -200,11 +206,13 @@ int mw_all_finite(const double *v, size_t n) {
     return 1;
 }
 
+/* (x, u, p, m, d): the functions of four inputs (events, update) read the first four only */
 static void set_args(MwInstance *inst, const double *x) {
     inst->arg[0] = x;
     inst->arg[1] = inst->u;
     inst->arg[2] = inst->p;
     inst->arg[3] = inst->m;
+    inst->arg[4] = inst->d;
 }
 
 static int eval_ode(MwInstance *inst, const double *x, double *xdot) {
@@ -254,6 +262,7 @@ double mw_value(const MwInstance *inst, const MwVariable *v) {
     case MW_KIND_OUTPUT: return inst->y[v->index];
     case MW_KIND_STEP: return inst->h_int;
     case MW_KIND_INDICATOR: return inst->z[v->index];
+    case MW_KIND_DISCRETE: return inst->d[v->index];
     default: return NAN;
     }
 }
@@ -264,6 +273,7 @@ int mw_assign(MwInstance *inst, const MwVariable *v, double value) {
     case MW_KIND_INPUT: inst->u[v->index] = value; break;
     case MW_KIND_PARAMETER: inst->p[v->index] = value; break;
     case MW_KIND_STEP: inst->h_int = value; break;
+    case MW_KIND_DISCRETE: inst->d[v->index] = value; break;
     default: return -1;
     }
     mw_invalidate(inst);
@@ -308,7 +318,7 @@ int mw_adjoint(MwInstance *inst, int need_ode, int need_out) {
     for (pass = 0; pass < 2; pass++) {
         if (pass == 0 ? !need_ode : !need_out) continue;
         set_args(inst, inst->x);
-        inst->arg[4] = pass == 0 ? inst->dxdot : inst->dy;
+        inst->arg[5] = pass == 0 ? inst->dxdot : inst->dy;
         inst->res[0] = inst->adj;
         if ((pass == 0 ? m->ode_adj : m->out_adj).eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
         for (i = 0; i < nx; i++) inst->dx[i] += inst->adj[i];
@@ -321,9 +331,9 @@ int mw_adjoint(MwInstance *inst, int need_ode, int need_out) {
 int mw_directional(MwInstance *inst, int need_dxdot, int need_dy) {
     const MwModel *m = inst->model;
     set_args(inst, inst->x);
-    inst->arg[4] = inst->dx;
-    inst->arg[5] = inst->du;
-    inst->arg[6] = inst->dp;
+    inst->arg[5] = inst->dx;
+    inst->arg[6] = inst->du;
+    inst->arg[7] = inst->dp;
     if (need_dxdot) {
         inst->res[0] = inst->dxdot;
         if (m->ode_dir.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
@@ -461,29 +471,104 @@ static int substep(MwInstance *inst, double hs) {
     return 0;
 }
 
-MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long n) {
-    const size_t nx = inst->model->nx, nz = inst->model->nz;
-    const double hs = h / (double)n;
-    unsigned long long k;
+unsigned long long mw_ticks(const MwModel *model, double h) {
+    double ratio, nearest;
+    if (model->nd == 0) return 1;
+    ratio = h / model->sample_period;
+    nearest = floor(ratio + 0.5);
+    if (!(ratio > 0.0) || !isfinite(ratio) || nearest < 1.0 || fabs(ratio - nearest) > MW_SUBSTEP_RTOL * ratio ||
+        !(nearest <= (double)MW_MAX_SUBSTEPS))
+        return 0;
+    return (unsigned long long)nearest;
+}
+
+int mw_is_close(double a, double b) {
+    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
+    return fabs(a - b) <= 1e-12 * (scale > 1.0 ? scale : 1.0);
+}
+
+int mw_past_stop_time(const MwInstance *inst, double t) {
+    return inst->stop_time_defined && t > inst->stop_time && !mw_is_close(t, inst->stop_time);
+}
+
+const char *mw_step_plan(const MwInstance *inst, double tc, double h, unsigned long long *ticks,
+                         unsigned long long *n, char *what, size_t len) {
+    const MwModel *m = inst->model;
+    double tol = 1e-9 * (fabs(inst->time) > 1.0 ? fabs(inst->time) : 1.0);
+    if (!isfinite(tc)) return "currentCommunicationPoint is not finite";
+    if (!(h > 0.0) || !isfinite(h)) {
+        snprintf(what, len, "communicationStepSize %g must be positive and finite", h);
+        return what;
+    }
+    if (fabs(tc - inst->time) > tol) {
+        snprintf(what, len, "currentCommunicationPoint %.17g differs from the FMU time %.17g", tc, inst->time);
+        return what;
+    }
+    if (mw_past_stop_time(inst, tc + h)) {
+        snprintf(what, len, "a step from %.17g of %.17g s ends past the stopTime %.17g of the experiment", tc, h,
+                 inst->stop_time);
+        return what;
+    }
+    *ticks = mw_ticks(m, h);
+    if (*ticks == 0) {
+        snprintf(what, len, "communicationStepSize %.17g is not a whole number of sample periods of %.17g s: the "
+                 "sampled states (a digital controller) change once per period", h, m->sample_period);
+        return what;
+    }
+    *n = m->nx > 0 ? mw_substeps(h / (double)*ticks, inst->h_int) : 1;
+    if (*n == 0 || *n > MW_MAX_SUBSTEPS / *ticks) {
+        snprintf(what, len, "communicationStepSize %g needs more than %llu sub-steps of internal_step %g s, "
+                 "the most one call takes: use shorter communication steps or a longer internal_step",
+                 h, MW_MAX_SUBSTEPS, inst->h_int);
+        return what;
+    }
+    return NULL;
+}
+
+/* d <- tick(x, u, p, d): one sample period's update of the sampled states; 0, or -1 (failed, non-finite). */
+static int tick(MwInstance *inst) {
+    const size_t nd = inst->model->nd;
+    inst->arg[0] = inst->x;
+    inst->arg[1] = inst->u;
+    inst->arg[2] = inst->p;
+    inst->arg[3] = inst->d;
+    inst->res[0] = inst->d_next;
+    if (inst->model->tick.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
+    if (!mw_all_finite(inst->d_next, nd)) return -1;
+    memcpy(inst->d, inst->d_next, nd * sizeof(double));
+    mw_invalidate(inst);
+    return 0;
+}
+
+MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long ticks,
+                    unsigned long long n) {
+    const size_t nx = inst->model->nx, nz = inst->model->nz, nd = inst->model->nd;
+    const double hs = h / (double)(ticks * n);
+    unsigned long long j, k = 0;
     int changed, x_changed, status;
 
     if (nx > 0) memcpy(inst->x_save, inst->x, nx * sizeof(double));
     if (nz > 0) memcpy(inst->m_save, inst->m, nz * sizeof(double));
+    if (nd > 0) memcpy(inst->d_save, inst->d, nd * sizeof(double));
     mw_invalidate(inst);
     /* inputs or parameters may have changed since the last step: the modes follow them first */
     status = mw_settle_modes(inst, &changed, &x_changed);
-    for (k = 0; k < n && status == 0; k++) status = substep(inst, hs);
+    for (j = 0; j < ticks && status == 0; j++) {
+        if (nd > 0) status = tick(inst); /* the sampled states: once per period, at its start */
+        for (k = 0; k < n && status == 0 && nx > 0; k++) status = substep(inst, hs);
+    }
     if (status != 0) {
         if (nx > 0) memcpy(inst->x, inst->x_save, nx * sizeof(double));
         if (nz > 0) memcpy(inst->m, inst->m_save, nz * sizeof(double));
+        if (nd > 0) memcpy(inst->d, inst->d_save, nd * sizeof(double));
         mw_invalidate(inst);
         inst->last_successful_time = tc;
         mw_log(inst, MW_DISCARD, MW_LOG_DISCARD,
-               "%s: %s in sub-step %llu of %llu at t = %.17g; the state at the communication point "
+               "%s: %s in sub-step %llu of %llu of period %llu of %llu; the state at the communication point "
                "%.17g is kept",
                fn, status == -1 ? "the state became non-finite" :
                status == -2 ? "the friction modes did not settle" : "more than 64 friction events",
-               k, n, tc + (double)(k > 0 ? k - 1 : 0) * hs, tc);
+               k, n, j, ticks, tc);
         return MW_DISCARD;
     }
     inst->time = tc + h;
@@ -495,7 +580,7 @@ MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsig
 
 MwSnapshot *mw_snapshot_new(MwInstance *inst) {
     const MwModel *m = inst->model;
-    size_t nv = m->nx + m->nu + m->np + m->nz;
+    size_t nv = m->nx + m->nu + m->np + m->nz + m->nd;
     MwSnapshot *snap = (MwSnapshot *)inst->host.alloc(1, sizeof(MwSnapshot) + nv * sizeof(double));
     if (snap == NULL) return NULL;
     snap->mode = inst->mode;
@@ -539,6 +624,7 @@ void mw_snapshot_take(const MwInstance *inst, MwSnapshot *snap) {
     if (m->nu > 0) memcpy(snap->values + m->nx, inst->u, m->nu * sizeof(double));
     if (m->np > 0) memcpy(snap->values + m->nx + m->nu, inst->p, m->np * sizeof(double));
     if (m->nz > 0) memcpy(snap->values + m->nx + m->nu + m->np, inst->m, m->nz * sizeof(double));
+    if (m->nd > 0) memcpy(snap->values + m->nx + m->nu + m->np + m->nz, inst->d, m->nd * sizeof(double));
 }
 
 void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap) {
@@ -551,6 +637,7 @@ void mw_snapshot_restore(MwInstance *inst, const MwSnapshot *snap) {
     if (m->nu > 0) memcpy(inst->u, snap->values + m->nx, m->nu * sizeof(double));
     if (m->np > 0) memcpy(inst->p, snap->values + m->nx + m->nu, m->np * sizeof(double));
     if (m->nz > 0) memcpy(inst->m, snap->values + m->nx + m->nu + m->np, m->nz * sizeof(double));
+    if (m->nd > 0) memcpy(inst->d, snap->values + m->nx + m->nu + m->np + m->nz, m->nd * sizeof(double));
     mw_invalidate(inst);
 }
 
@@ -566,7 +653,7 @@ int mw_mode_valid(const MwInstance *inst, unsigned int mode) {
 }
 
 /*
- * Serialized FMU state, version 2, native byte order:
+ * Serialized FMU state, version 3 (2 had no sampled states: nd was 4 bytes of zeros), native byte order:
  *   0   8 bytes  "MWFMUST1"
  *   8   uint32   format version (2)
  *  12   uint32   0x01020304, byte-order mark
@@ -574,17 +661,17 @@ int mw_mode_valid(const MwInstance *inst, unsigned int mode) {
  *  24   64 bytes GUID of the model, zero padded
  *  88   uint32   nx, nu, np, mode
  * 104   double   time, last successful time, internal step
- * 128   uint32   nz, then 4 bytes of zeros
- * 136   double   x[nx], u[nu], p[np], m[nz]
+ * 128   uint32   nz, nd
+ * 136   double   x[nx], u[nu], p[np], m[nz], d[nd]
  */
 #define MW_SER_MAGIC "MWFMUST1"
-#define MW_SER_VERSION 2u
+#define MW_SER_VERSION 3u
 #define MW_SER_BOM 0x01020304u
 #define MW_SER_GUID 64u
 #define MW_SER_HEADER 136u
 
 size_t mw_serialized_size(const MwModel *m) {
-    return MW_SER_HEADER + (m->nx + m->nu + m->np + m->nz) * sizeof(double);
+    return MW_SER_HEADER + (m->nx + m->nu + m->np + m->nz + m->nd) * sizeof(double);
 }
 
 static void put_u32(unsigned char *out, size_t at, unsigned int v) {
@@ -601,7 +688,7 @@ static unsigned int get_u32(const unsigned char *in, size_t at) {
 void mw_serialize(const MwModel *m, const MwSnapshot *snap, unsigned char *out) {
     unsigned long long total = (unsigned long long)mw_serialized_size(m);
     size_t guid_len = strlen(m->guid);
-    size_t nv = m->nx + m->nu + m->np + m->nz;
+    size_t nv = m->nx + m->nu + m->np + m->nz + m->nd;
 
     memset(out, 0, MW_SER_HEADER);
     memcpy(out, MW_SER_MAGIC, 8);
@@ -617,13 +704,14 @@ void mw_serialize(const MwModel *m, const MwSnapshot *snap, unsigned char *out) 
     memcpy(out + 112, &snap->last_successful_time, 8);
     memcpy(out + 120, &snap->h_int, 8);
     put_u32(out, 128, (unsigned int)m->nz);
+    put_u32(out, 132, (unsigned int)m->nd);
     if (nv > 0) memcpy(out + MW_SER_HEADER, snap->values, nv * sizeof(double));
 }
 
 const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size_t size, MwSnapshot *snap) {
     const MwModel *m = inst->model;
     size_t expected = mw_serialized_size(m);
-    size_t nv = m->nx + m->nu + m->np + m->nz;
+    size_t nv = m->nx + m->nu + m->np + m->nz + m->nd;
     unsigned long long total;
     char guid[MW_SER_GUID];
     size_t guid_len = strlen(m->guid);
@@ -639,7 +727,7 @@ const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size
     memcpy(guid, m->guid, guid_len < MW_SER_GUID ? guid_len : MW_SER_GUID - 1);
     if (memcmp(in + 24, guid, MW_SER_GUID) != 0) return "the state belongs to another model (GUID differs)";
     if (get_u32(in, 88) != m->nx || get_u32(in, 92) != m->nu || get_u32(in, 96) != m->np ||
-        get_u32(in, 128) != m->nz)
+        get_u32(in, 128) != m->nz || get_u32(in, 132) != m->nd)
         return "the vector sizes differ from this model's";
     if (!mw_mode_valid(inst, get_u32(in, 100))) return "the recorded mode is not valid for this instance type";
     memcpy(&t, in + 104, 8);

@@ -83,13 +83,14 @@ struct MwInstance {
     /* every FMU state taken from this instance and not yet freed, freed with the instance */
     MwSnapshot *snapshots;
 
-    /* model vectors; m: the discrete modes, z: the event indicators */
-    double *x, *u, *p, *m, *xdot, *y, *z;
+    /* model vectors; m: the discrete modes, z: the event indicators, d: the sampled discrete states */
+    double *x, *u, *p, *m, *xdot, *y, *z, *d;
     int xdot_valid, y_valid, z_valid;
 
     /* integrator and event scratch */
     double *x_save, *x_stage, *k1, *k2, *k3, *k4;
     double *m_save, *z0, *z1, *next; /* nz, nz, nz, nz + nx */
+    double *d_save, *d_next;         /* nd, nd */
 
     /* directional-derivative scratch; adjoint: seeds in dxdot and dy, sensitivities into dx, du, dp */
     double *dx, *du, *dp, *dxdot, *dy, *adj; /* adj: nx + nu + np */
@@ -103,14 +104,14 @@ struct MwInstance {
     double *block; /* one allocation holding every double vector above */
 };
 
-/* A copy of what GetFMUstate saves: mode, times, internal step, x, u, p and m. */
+/* A copy of what GetFMUstate saves: mode, times, internal step, x, u, p, m and d. */
 struct MwSnapshot {
     MwSnapshot *prev, *next; /* the owning instance's list */
     unsigned int mode;
     double time;
     double last_successful_time;
     double h_int;
-    double *values; /* nx + nu + np + nz, right after the struct in the same allocation */
+    double *values; /* nx + nu + np + nz + nd, right after the struct in the same allocation */
 };
 
 #define mw_instance_new MW_SYMBOL(mw_instance_new)
@@ -124,6 +125,10 @@ struct MwSnapshot {
 #define mw_all_finite MW_SYMBOL(mw_all_finite)
 #define mw_substeps MW_SYMBOL(mw_substeps)
 #define mw_do_step MW_SYMBOL(mw_do_step)
+#define mw_ticks MW_SYMBOL(mw_ticks)
+#define mw_step_plan MW_SYMBOL(mw_step_plan)
+#define mw_is_close MW_SYMBOL(mw_is_close)
+#define mw_past_stop_time MW_SYMBOL(mw_past_stop_time)
 #define mw_events MW_SYMBOL(mw_events)
 #define mw_settle_modes MW_SYMBOL(mw_settle_modes)
 #define mw_start_modes MW_SYMBOL(mw_start_modes)
@@ -182,9 +187,29 @@ MW_HIDDEN int mw_all_finite(const double *v, size_t n);
  */
 MW_HIDDEN unsigned long long mw_substeps(double h, double h_int);
 
-/* The co-simulation step from tc to tc + h in n sub-steps; MW_DISCARD keeps the state at tc (fn: the
-   calling FMI function, for the message). */
-MW_HIDDEN MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long n);
+/*
+ * Number of sample periods in a communication step h: h / sample_period if that is an integer k >= 1
+ * up to a relative MW_SUBSTEP_RTOL (then k), else 0 (a step that is not a whole number of periods).
+ * 1 for a model without sampled states (nd = 0).
+ */
+MW_HIDDEN unsigned long long mw_ticks(const MwModel *model, double h);
+/*
+ * Check a co-simulation step from tc of length h and plan it: the sample periods (*ticks) and the RK4
+ * sub-steps of each (*n). NULL when it can be taken, else what is wrong (written into what[len]).
+ */
+MW_HIDDEN const char *mw_step_plan(const MwInstance *inst, double tc, double h, unsigned long long *ticks,
+                                   unsigned long long *n, char *what, size_t len);
+/* Times within a relative 1e-12 (absolute near 0) count as equal, as floating-point sums of steps differ. */
+MW_HIDDEN int mw_is_close(double a, double b);
+/* Whether t is past the experiment's stopTime, rounding forgiven. */
+MW_HIDDEN int mw_past_stop_time(const MwInstance *inst, double t);
+/*
+ * The co-simulation step from tc to tc + h: ticks sample periods (1 without sampled states), each a
+ * tick of d then n RK4 sub-steps; MW_DISCARD keeps the state at tc (fn: the calling FMI function,
+ * for the message).
+ */
+MW_HIDDEN MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long ticks,
+                              unsigned long long n);
 
 /* The event indicators at state x (current u, p, m) into z; 0 on success. */
 MW_HIDDEN int mw_events(MwInstance *inst, const double *x, double *z);

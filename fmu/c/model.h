@@ -4,14 +4,18 @@
  * the CasADi code it points to).
  *
  * A model is a continuous-time system with nz discrete modes m (the friction
- * mode of each joint; nz may be 0)
- *     xdot = ode(x, u, p, m),   y = out(x, u, p, m),   z = events(x, u, p, m)
+ * mode of each joint; nz may be 0) and nd sampled discrete states d (a digital
+ * controller's integrator; nd may be 0)
+ *     xdot = ode(x, u, p, m, d),   y = out(x, u, p, m, d),   z = events(x, u, p, m)
  * with nx states, nu inputs, np parameters and ny outputs, plus the forward
  * directional derivatives of ode and out and their reverse-mode (adjoint)
  * products (m held). The nz event indicators z
  * are positive while the modes are valid. At an event, update(x, u, p, m)
  * gives the next modes and states (one pass; the wrapper repeats it until
- * nothing changes); start(x, u, p) gives the modes to begin from. Every FMI
+ * nothing changes); start(x, u, p) gives the modes to begin from. The sampled
+ * states change once per sample_period only, at the start of each period:
+ * d <- tick(x, u, p, d) with the inputs held over the period (zero-order hold);
+ * they are never iterated. Every FMI
  * variable is one row of a table indexed by its value reference; a row says
  * which vector the variable lives in (kind) and where (index). FMI 3.0 groups
  * consecutive rows into array variables (arrays[], one value reference each);
@@ -63,7 +67,8 @@ typedef enum {
     MW_KIND_PARAMETER = 3,  /* p[index] */
     MW_KIND_OUTPUT = 4,     /* y[index] = out(x, u, p)[index] */
     MW_KIND_STEP = 5,       /* the co-simulation internal step, a fixed parameter */
-    MW_KIND_INDICATOR = 6   /* z[index] = events(x, u, p, m)[index], an event indicator */
+    MW_KIND_INDICATOR = 6,  /* z[index] = events(x, u, p, m)[index], an event indicator */
+    MW_KIND_DISCRETE = 7    /* d[index], a sampled discrete state */
 } MwKind;
 
 /* When a variable may be set (FMI 2.0 causality/variability/initial). */
@@ -107,12 +112,16 @@ typedef struct {
     const double *u_start;        /* nu */
     const double *p_start;        /* np */
     double step_start;            /* default internal step of the co-simulation integrator */
-    MwFunction ode;               /* (x, u, p, m) -> xdot */
-    MwFunction out;               /* (x, u, p, m) -> y */
-    MwFunction ode_dir;           /* (x, u, p, m, dx, du, dp) -> dxdot, forward mode */
-    MwFunction out_dir;           /* (x, u, p, m, dx, du, dp) -> dy, forward mode */
-    MwFunction ode_adj;           /* (x, u, p, m, wxdot) -> [ax; au; ap] = J_ode^T wxdot, reverse mode */
-    MwFunction out_adj;           /* (x, u, p, m, wy) -> [ax; au; ap] = J_out^T wy, reverse mode */
+    size_t nd;                    /* sampled discrete states d (0: none) */
+    double sample_period;         /* s: tick runs once per period; 0 when nd = 0 */
+    const double *d_start;        /* nd */
+    MwFunction ode;               /* (x, u, p, m, d) -> xdot */
+    MwFunction out;               /* (x, u, p, m, d) -> y */
+    MwFunction ode_dir;           /* (x, u, p, m, d, dx, du, dp) -> dxdot, forward mode (d held) */
+    MwFunction out_dir;           /* (x, u, p, m, d, dx, du, dp) -> dy, forward mode (d held) */
+    MwFunction ode_adj;           /* (x, u, p, m, d, wxdot) -> [ax; au; ap] = J_ode^T wxdot, reverse mode */
+    MwFunction out_adj;           /* (x, u, p, m, d, wy) -> [ax; au; ap] = J_out^T wy, reverse mode */
+    MwFunction tick;              /* (x, u, p, d) -> d_next, once per sample period */
     MwFunction events;            /* (x, u, p, m) -> z, nz indicators, > 0 while the modes hold */
     MwFunction update;            /* (x, u, p, m) -> (m_next, x_next): one pass of the mode update */
     MwFunction start;             /* (x, u, p) -> m: the modes to begin from */

@@ -20,6 +20,7 @@ static const double mw_x_start[] = $x_start;
 static const double mw_x_nominal[] = $x_nominal;
 static const double mw_u_start[] = $u_start;
 static const double mw_p_start[] = $p_start;
+static const double mw_d_start[] = $d_start;
 
 static const MwModel mw_model_data = {
     MW_MODEL_IDENTIFIER,
@@ -35,12 +36,16 @@ static const MwModel mw_model_data = {
     mw_u_start,
     mw_p_start,
     $step_start,
+    MW_ND,
+    $sample_period,
+    mw_d_start,
     {$ode, ${ode}_work},
     {$out, ${out}_work},
     {$ode_dir, ${ode_dir}_work},
     {$out_dir, ${out_dir}_work},
     {$ode_adj, ${ode_adj}_work},
     {$out_adj, ${out_adj}_work},
+    {$tick, ${tick}_work},
     {$events, ${events}_work},
     {$update, ${update}_work},
     {$start, ${start}_work},

@@ -10,6 +10,7 @@
 #define MW_NP $np
 #define MW_NY $ny
 #define MW_NZ $nz
+#define MW_ND $nd
 #define MW_NVARS $nvars
 #define MW_NARRAYS $narrays
 
