@@ -392,90 +392,44 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* ---------------------------------------------------------------- FMU state */
 
+/* The FMU-state calls: instance.c does the work, a problem is an error with its message. */
+static fmi2Status state_call(MwInstance *inst, const char *fn, const char *problem) {
+    return problem == NULL ? fmi2OK : fail(inst, fn, problem);
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    MwSnapshot *snap;
     ENTER(GetFMUstate, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2GetFMUstate", "FMUstate", FMUstate)) return fmi2Error;
-    if (*FMUstate == NULL) {
-        snap = mw_snapshot_new(inst);
-        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "out of memory");
-        *FMUstate = (fmi2FMUstate)snap;
-    } else {
-        snap = mw_snapshot_find(inst, *FMUstate);
-        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "*FMUstate is not an FMU state of this instance");
-    }
-    mw_snapshot_take(inst, snap);
-    return fmi2OK;
+    return state_call(inst, "fmi2GetFMUstate", mw_state_get(inst, (void **)FMUstate));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    const MwSnapshot *snap;
     ENTER(SetFMUstate, FOR_ANY, MODES_FMUstate);
-    snap = mw_snapshot_find(inst, FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2SetFMUstate", "FMUstate is NULL or not an FMU state of this instance");
-    if (!mw_mode_valid(inst, snap->mode))
-        return fail(inst, "fmi2SetFMUstate", "the FMU state was taken by an instance of the other interface type");
-    mw_snapshot_restore(inst, snap);
-    return fmi2OK;
+    return state_call(inst, "fmi2SetFMUstate", mw_state_set(inst, FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    MwSnapshot *snap;
     ENTER(FreeFMUstate, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2FreeFMUstate", "FMUstate", FMUstate)) return fmi2Error;
-    if (*FMUstate == NULL) return fmi2OK;
-    snap = mw_snapshot_find(inst, *FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2FreeFMUstate", "*FMUstate is not an FMU state of this instance");
-    mw_snapshot_free(inst, snap);
-    *FMUstate = NULL;
-    return fmi2OK;
+    return state_call(inst, "fmi2FreeFMUstate", mw_state_free(inst, (void **)FMUstate));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
     ENTER(SerializedFMUstateSize, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2SerializedFMUstateSize", "size", size)) return fmi2Error;
-    if (mw_snapshot_find(inst, FMUstate) == NULL)
-        return fail(inst, "fmi2SerializedFMUstateSize", "FMUstate is NULL or not an FMU state of this instance");
-    *size = mw_serialized_size(inst->model);
-    return fmi2OK;
+    return state_call(inst, "fmi2SerializedFMUstateSize", mw_state_size(inst, FMUstate, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    const MwSnapshot *snap;
-    char what[128];
+    char what[160];
     ENTER(SerializeFMUstate, FOR_ANY, MODES_FMUstate);
-    snap = mw_snapshot_find(inst, FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2SerializeFMUstate", "FMUstate is NULL or not an FMU state of this instance");
-    if (null_arg(inst, "fmi2SerializeFMUstate", "serializedState[]", serializedState)) return fmi2Error;
-    if (size != mw_serialized_size(inst->model)) {
-        snprintf(what, sizeof(what), "size %lu differs from fmi2SerializedFMUstateSize, %lu bytes",
-                 (unsigned long)size, (unsigned long)mw_serialized_size(inst->model));
-        return fail(inst, "fmi2SerializeFMUstate", what);
-    }
-    mw_serialize(inst->model, snap, (unsigned char *)serializedState);
-    return fmi2OK;
+    return state_call(inst, "fmi2SerializeFMUstate",
+                      mw_state_serialize(inst, FMUstate, (unsigned char *)serializedState, size, "fmi2SerializedFMUstateSize", what,
+                                         sizeof(what)));
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    MwSnapshot *snap;
-    const char *problem;
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate *FMUstate) {
     char what[192];
     ENTER(DeSerializeFMUstate, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2DeSerializeFMUstate", "serializedState[]", serializedState) ||
-        null_arg(inst, "fmi2DeSerializeFMUstate", "FMUstate", FMUstate))
-        return fmi2Error;
-    /* *FMUstate is an output: its incoming value is not read; a new FMU state is always allocated */
-    snap = mw_snapshot_new(inst);
-    if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "out of memory");
-    problem = mw_deserialize(inst, (const unsigned char *)serializedState, size, snap);
-    if (problem != NULL) {
-        mw_snapshot_free(inst, snap);
-        snprintf(what, sizeof(what), "%lu bytes rejected: %s", (unsigned long)size, problem);
-        return fail(inst, "fmi2DeSerializeFMUstate", what);
-    }
-    *FMUstate = (fmi2FMUstate)snap;
-    return fmi2OK;
+    return state_call(inst, "fmi2DeSerializeFMUstate", mw_state_deserialize(inst, (const unsigned char *)serializedState, size,
+                                                                     (void **)FMUstate, what, sizeof(what)));
 }
 
 /* ----------------------------------------------------- directional derivatives */
@@ -694,8 +648,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
     problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
     if (problem != NULL) return fail(inst, fn, problem);
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sample periods of %llu sub-steps of %.17g s", fn,
-           currentCommunicationPoint, ticks, n, communicationStepSize / (double)(ticks * n));
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s (%llu sample periods)", fn,
+           currentCommunicationPoint, ticks * n, communicationStepSize / (double)(ticks * n), ticks);
     status = (fmi2Status)mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
     if (status == fmi2Discard) {
         inst->mode = MW_MODE_STEP_FAILED;

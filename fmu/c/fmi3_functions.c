@@ -631,88 +631,44 @@ fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
 
 /* ---------------------------------------------------------------- FMU state */
 
+/* The FMU-state calls: instance.c does the work, a problem is an error with its message. */
+static fmi3Status state_call(MwInstance *inst, const char *fn, const char *problem) {
+    return problem == NULL ? fmi3OK : fail(inst, fn, problem);
+}
+
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    MwSnapshot *snap;
     ENTER(GetFMUState, FOR_ANY, ALL_MODES);
-    if (null_arg(inst, "fmi3GetFMUState", "FMUState", FMUState)) return fmi3Error;
-    if (*FMUState == NULL) {
-        snap = mw_snapshot_new(inst);
-        if (snap == NULL) return fail(inst, "fmi3GetFMUState", "out of memory");
-        *FMUState = (fmi3FMUState)snap;
-    } else {
-        snap = mw_snapshot_find(inst, *FMUState);
-        if (snap == NULL) return fail(inst, "fmi3GetFMUState", "*FMUState is not an FMU state of this instance");
-    }
-    mw_snapshot_take(inst, snap);
-    return fmi3OK;
+    return state_call(inst, "fmi3GetFMUState", mw_state_get(inst, (void **)FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    const MwSnapshot *snap;
     ENTER(SetFMUState, FOR_ANY, ALL_MODES);
-    snap = mw_snapshot_find(inst, FMUState);
-    if (snap == NULL) return fail(inst, "fmi3SetFMUState", "FMUState is NULL or not an FMU state of this instance");
-    if (!mw_mode_valid(inst, snap->mode))
-        return fail(inst, "fmi3SetFMUState", "the FMU state was taken by an instance of the other interface type");
-    mw_snapshot_restore(inst, snap);
-    return fmi3OK;
+    return state_call(inst, "fmi3SetFMUState", mw_state_set(inst, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    MwSnapshot *snap;
     ENTER(FreeFMUState, FOR_ANY, ALL_MODES);
-    if (null_arg(inst, "fmi3FreeFMUState", "FMUState", FMUState)) return fmi3Error;
-    if (*FMUState == NULL) return fmi3OK;
-    snap = mw_snapshot_find(inst, *FMUState);
-    if (snap == NULL) return fail(inst, "fmi3FreeFMUState", "*FMUState is not an FMU state of this instance");
-    mw_snapshot_free(inst, snap);
-    *FMUState = NULL;
-    return fmi3OK;
+    return state_call(inst, "fmi3FreeFMUState", mw_state_free(inst, (void **)FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size) {
     ENTER(SerializedFMUStateSize, FOR_ANY, ALL_MODES);
-    if (null_arg(inst, "fmi3SerializedFMUStateSize", "size", size)) return fmi3Error;
-    if (mw_snapshot_find(inst, FMUState) == NULL)
-        return fail(inst, "fmi3SerializedFMUStateSize", "FMUState is NULL or not an FMU state of this instance");
-    *size = mw_serialized_size(inst->model);
-    return fmi3OK;
+    return state_call(inst, "fmi3SerializedFMUStateSize", mw_state_size(inst, FMUState, size));
 }
 
-fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
-                                 size_t size) {
-    const char *fn = "fmi3SerializeFMUState";
-    const MwSnapshot *snap;
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[], size_t size) {
+    char what[160];
     ENTER(SerializeFMUState, FOR_ANY, ALL_MODES);
-    snap = mw_snapshot_find(inst, FMUState);
-    if (snap == NULL) return fail(inst, fn, "FMUState is NULL or not an FMU state of this instance");
-    if (null_arg(inst, fn, "serializedState[]", serializedState)) return fmi3Error;
-    if (wrong_size(inst, fn, "size (from fmi3SerializedFMUStateSize)", size, mw_serialized_size(inst->model)))
-        return fmi3Error;
-    mw_serialize(inst->model, snap, serializedState);
-    return fmi3OK;
+    return state_call(inst, "fmi3SerializeFMUState",
+                      mw_state_serialize(inst, FMUState, (unsigned char *)serializedState, size, "fmi3SerializedFMUStateSize", what,
+                                         sizeof(what)));
 }
 
-fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
-                                   fmi3FMUState *FMUState) {
-    MwSnapshot *snap;
-    const char *problem;
+fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size, fmi3FMUState *FMUState) {
     char what[192];
     ENTER(DeserializeFMUState, FOR_ANY, ALL_MODES);
-    if (null_arg(inst, "fmi3DeserializeFMUState", "serializedState[]", serializedState) ||
-        null_arg(inst, "fmi3DeserializeFMUState", "FMUState", FMUState))
-        return fmi3Error;
-    /* *FMUState is an output: a new FMU state is always allocated */
-    snap = mw_snapshot_new(inst);
-    if (snap == NULL) return fail(inst, "fmi3DeserializeFMUState", "out of memory");
-    problem = mw_deserialize(inst, serializedState, size, snap);
-    if (problem != NULL) {
-        mw_snapshot_free(inst, snap);
-        snprintf(what, sizeof(what), "%lu bytes rejected: %s", (unsigned long)size, problem);
-        return fail(inst, "fmi3DeserializeFMUState", what);
-    }
-    *FMUState = (fmi3FMUState)snap;
-    return fmi3OK;
+    return state_call(inst, "fmi3DeserializeFMUState", mw_state_deserialize(inst, (const unsigned char *)serializedState, size,
+                                                                     (void **)FMUState, what, sizeof(what)));
 }
 
 /* ----------------------------------------------- directional and adjoint derivatives */
@@ -969,8 +925,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return fmi3Error;
     problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
     if (problem != NULL) return fail(inst, fn, problem);
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sample periods of %llu sub-steps of %.17g s", fn,
-           currentCommunicationPoint, ticks, n, communicationStepSize / (double)(ticks * n));
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s (%llu sample periods)", fn,
+           currentCommunicationPoint, ticks * n, communicationStepSize / (double)(ticks * n), ticks);
     status = mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
     *eventHandlingNeeded = fmi3False;
     *terminateSimulation = fmi3False;

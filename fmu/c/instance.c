@@ -750,3 +750,79 @@ const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size
     snap->h_int = h;
     return NULL;
 }
+
+/* ------------------------------------------------------- FMU-state calls */
+
+const char *mw_state_get(MwInstance *inst, void **state) {
+    MwSnapshot *snap;
+    if (state == NULL) return "argument FMUstate is NULL";
+    if (*state == NULL) {
+        snap = mw_snapshot_new(inst);
+        if (snap == NULL) return "out of memory";
+        *state = snap;
+    } else {
+        snap = mw_snapshot_find(inst, *state);
+        if (snap == NULL) return "*FMUstate is not an FMU state of this instance";
+    }
+    mw_snapshot_take(inst, snap);
+    return NULL;
+}
+
+const char *mw_state_set(MwInstance *inst, const void *state) {
+    const MwSnapshot *snap = mw_snapshot_find(inst, state);
+    if (snap == NULL) return "FMUstate is NULL or not an FMU state of this instance";
+    if (!mw_mode_valid(inst, snap->mode)) return "the FMU state was taken by an instance of the other interface type";
+    mw_snapshot_restore(inst, snap);
+    return NULL;
+}
+
+const char *mw_state_free(MwInstance *inst, void **state) {
+    MwSnapshot *snap;
+    if (state == NULL) return "argument FMUstate is NULL";
+    if (*state == NULL) return NULL;
+    snap = mw_snapshot_find(inst, *state);
+    if (snap == NULL) return "*FMUstate is not an FMU state of this instance";
+    mw_snapshot_free(inst, snap);
+    *state = NULL;
+    return NULL;
+}
+
+const char *mw_state_size(const MwInstance *inst, const void *state, size_t *size) {
+    if (size == NULL) return "argument size is NULL";
+    if (mw_snapshot_find(inst, state) == NULL) return "FMUstate is NULL or not an FMU state of this instance";
+    *size = mw_serialized_size(inst->model);
+    return NULL;
+}
+
+const char *mw_state_serialize(const MwInstance *inst, const void *state, unsigned char *out, size_t size,
+                               const char *size_fn, char *what, size_t len) {
+    const MwSnapshot *snap = mw_snapshot_find(inst, state);
+    if (snap == NULL) return "FMUstate is NULL or not an FMU state of this instance";
+    if (out == NULL) return "argument serializedState[] is NULL";
+    if (size != mw_serialized_size(inst->model)) {
+        snprintf(what, len, "size %lu differs from %s, %lu bytes", (unsigned long)size, size_fn,
+                 (unsigned long)mw_serialized_size(inst->model));
+        return what;
+    }
+    mw_serialize(inst->model, snap, out);
+    return NULL;
+}
+
+const char *mw_state_deserialize(MwInstance *inst, const unsigned char *in, size_t size, void **state, char *what,
+                                 size_t len) {
+    MwSnapshot *snap;
+    const char *problem;
+    if (in == NULL) return "argument serializedState[] is NULL";
+    if (state == NULL) return "argument FMUstate is NULL";
+    /* *state is an output: its incoming value is not read; a new FMU state is always allocated */
+    snap = mw_snapshot_new(inst);
+    if (snap == NULL) return "out of memory";
+    problem = mw_deserialize(inst, in, size, snap);
+    if (problem != NULL) {
+        mw_snapshot_free(inst, snap);
+        snprintf(what, len, "%lu bytes rejected: %s", (unsigned long)size, problem);
+        return what;
+    }
+    *state = snap;
+    return NULL;
+}

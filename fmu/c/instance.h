@@ -150,6 +150,12 @@ struct MwSnapshot {
 #define mw_serialize MW_SYMBOL(mw_serialize)
 #define mw_deserialize MW_SYMBOL(mw_deserialize)
 #define mw_mode_valid MW_SYMBOL(mw_mode_valid)
+#define mw_state_get MW_SYMBOL(mw_state_get)
+#define mw_state_set MW_SYMBOL(mw_state_set)
+#define mw_state_free MW_SYMBOL(mw_state_free)
+#define mw_state_size MW_SYMBOL(mw_state_size)
+#define mw_state_serialize MW_SYMBOL(mw_state_serialize)
+#define mw_state_deserialize MW_SYMBOL(mw_state_deserialize)
 
 MW_HIDDEN MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *name,
                                       const MwHost *host, int logging_on);
@@ -252,5 +258,20 @@ MW_HIDDEN void mw_serialize(const MwModel *model, const MwSnapshot *snap, unsign
 /* 0 on success, else a message saying what is wrong with the bytes. */
 MW_HIDDEN const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size_t size, MwSnapshot *snap);
 MW_HIDDEN int mw_mode_valid(const MwInstance *inst, unsigned int mode);
+
+/*
+ * The FMU-state calls of FMI 2.0 and 3.0 (Get, Set, Free, SerializedSize, Serialize, Deserialize):
+ * NULL on success, else what is wrong (what[len] holds it when it has numbers); the wrapper logs it
+ * and returns its error status. A rejected call changes nothing.
+ */
+MW_HIDDEN const char *mw_state_get(MwInstance *inst, void **state);
+MW_HIDDEN const char *mw_state_set(MwInstance *inst, const void *state);
+MW_HIDDEN const char *mw_state_free(MwInstance *inst, void **state);
+MW_HIDDEN const char *mw_state_size(const MwInstance *inst, const void *state, size_t *size);
+/* size_fn: the wrapper's SerializedFMUStateSize, named in the message of a wrong size */
+MW_HIDDEN const char *mw_state_serialize(const MwInstance *inst, const void *state, unsigned char *out, size_t size,
+                                         const char *size_fn, char *what, size_t len);
+MW_HIDDEN const char *mw_state_deserialize(MwInstance *inst, const unsigned char *in, size_t size, void **state,
+                                           char *what, size_t len);
 
 #endif /* MW_INSTANCE_H */
