@@ -59,7 +59,14 @@
 #define MODES_CancelStep MW_MODE_STEP_COMPLETE
 #define MODES_GetStatus (MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED | MW_MODE_TERMINATED)
 
-enum { FOR_ANY = 0, FOR_ME = 1, FOR_CS = 2 };
+#define FOR_ANY MW_FOR_ANY
+#define FOR_ME MW_FOR_ME
+#define FOR_CS MW_FOR_CS
+/* the shared argument checks of instance.c, with this version's status type */
+#define fail(inst, fn, what) ((fmi2Status)mw_fail(inst, fn, what))
+#define null_arg mw_null_arg
+#define wrong_size mw_wrong_size
+#define non_finite(inst, fn, what, v, n) ((fmi2Status)mw_non_finite(inst, fn, what, v, n))
 
 static const char *mode_name(unsigned int mode) {
     switch (mode) {
@@ -75,45 +82,9 @@ static const char *mode_name(unsigned int mode) {
     }
 }
 
-/* Log an error, enter the error mode, return fmi2Error. */
-static fmi2Status fail(MwInstance *inst, const char *fn, const char *what) {
-    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: %s", fn, what);
-    inst->mode = MW_MODE_ERROR;
-    return fmi2Error;
-}
-
-/* The instance if the call is legal for its interface type and mode; else logs, returns NULL. */
-static MwInstance *enter(fmi2Component c, const char *fn, int interface_type, unsigned int modes) {
-    MwInstance *inst = (MwInstance *)c;
-    if (inst == NULL) return NULL;
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s", fn);
-    if (interface_type == FOR_ME && inst->type != MW_MODEL_EXCHANGE) {
-        fail(inst, fn, "this function belongs to Model Exchange, the instance is Co-Simulation");
-        return NULL;
-    }
-    if (interface_type == FOR_CS && inst->type != MW_CO_SIMULATION) {
-        fail(inst, fn, "this function belongs to Co-Simulation, the instance is Model Exchange");
-        return NULL;
-    }
-    if ((inst->mode & modes) == 0) {
-        mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in mode \"%s\"", fn,
-               mode_name(inst->mode));
-        inst->mode = MW_MODE_ERROR;
-        return NULL;
-    }
-    return inst;
-}
-
 #define ENTER(fn, type, modes)                                 \
-    MwInstance *inst = enter(c, "fmi2" #fn, type, modes);      \
+    MwInstance *inst = mw_enter(c, "fmi2" #fn, type, modes, mode_name); \
     if (inst == NULL) return fmi2Error
-
-static int null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr) {
-    if (ptr != NULL) return 0;
-    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
-    inst->mode = MW_MODE_ERROR;
-    return 1;
-}
 
 static fmi2Status no_variables_of_type(MwInstance *inst, const char *fn, const char *type_name,
                                        const fmi2ValueReference vr[], size_t nvr, const void *values) {
@@ -135,14 +106,6 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     ENTER(SetDebugLogging, FOR_ANY, MODES_SetDebugLogging);
     if (nCategories > 0 && null_arg(inst, "fmi2SetDebugLogging", "categories[]", categories)) return fmi2Error;
     return (fmi2Status)mw_set_logging(inst, "fmi2SetDebugLogging", loggingOn, nCategories, categories);
-}
-
-
-/* A non-finite computed value: logged, and the call returns fmi2Discard (the one policy). */
-static fmi2Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
-    if (mw_all_finite(v, n)) return fmi2OK;
-    mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
-    return fmi2Discard;
 }
 
 /* The instance's log lines to the importer's fmi2CallbackLogger, whose message is a format string. */
@@ -550,14 +513,6 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     }
     inst->time = time;
     return fmi2OK;
-}
-
-static int wrong_size(MwInstance *inst, const char *fn, const char *name, size_t got, size_t expected) {
-    char what[128];
-    if (got == expected) return 0;
-    snprintf(what, sizeof(what), "%s is %lu, the model has %lu", name, (unsigned long)got, (unsigned long)expected);
-    fail(inst, fn, what);
-    return 1;
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {

@@ -61,7 +61,14 @@
 #define MODES_DoStep MW_MODE_STEP_COMPLETE
 #define MODES_GetOutputDerivatives (MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED | MW_MODE_TERMINATED | MW_MODE_ERROR)
 
-enum { FOR_ANY = 0, FOR_ME = 1, FOR_CS = 2 };
+#define FOR_ANY MW_FOR_ANY
+#define FOR_ME MW_FOR_ME
+#define FOR_CS MW_FOR_CS
+/* the shared argument checks of instance.c, with this version's status type */
+#define fail(inst, fn, what) ((fmi3Status)mw_fail(inst, fn, what))
+#define null_arg mw_null_arg
+#define wrong_size mw_wrong_size
+#define non_finite(inst, fn, what, v, n) ((fmi3Status)mw_non_finite(inst, fn, what, v, n))
 
 static const char *mode_name(unsigned int mode) {
     switch (mode) {
@@ -77,60 +84,9 @@ static const char *mode_name(unsigned int mode) {
     }
 }
 
-/* Log an error, enter the error mode, return fmi3Error. */
-static fmi3Status fail(MwInstance *inst, const char *fn, const char *what) {
-    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: %s", fn, what);
-    inst->mode = MW_MODE_ERROR;
-    return fmi3Error;
-}
-
-/* The instance if the call is legal for its interface type and mode; else logs, returns NULL. */
-static MwInstance *enter(fmi3Instance c, const char *fn, int interface_type, unsigned int modes) {
-    MwInstance *inst = (MwInstance *)c;
-    if (inst == NULL) return NULL;
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s", fn);
-    if (interface_type == FOR_ME && inst->type != MW_MODEL_EXCHANGE) {
-        fail(inst, fn, "this function belongs to Model Exchange, the instance is Co-Simulation");
-        return NULL;
-    }
-    if (interface_type == FOR_CS && inst->type != MW_CO_SIMULATION) {
-        fail(inst, fn, "this function belongs to Co-Simulation, the instance is Model Exchange");
-        return NULL;
-    }
-    if ((inst->mode & modes) == 0) {
-        mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in %s", fn, mode_name(inst->mode));
-        inst->mode = MW_MODE_ERROR;
-        return NULL;
-    }
-    return inst;
-}
-
 #define ENTER(fn, type, modes)                                 \
-    MwInstance *inst = enter(instance, "fmi3" #fn, type, modes); \
+    MwInstance *inst = mw_enter(instance, "fmi3" #fn, type, modes, mode_name); \
     if (inst == NULL) return fmi3Error
-
-static int null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr) {
-    if (ptr != NULL) return 0;
-    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
-    inst->mode = MW_MODE_ERROR;
-    return 1;
-}
-
-static int wrong_size(MwInstance *inst, const char *fn, const char *name, size_t got, size_t expected) {
-    char what[160];
-    if (got == expected) return 0;
-    snprintf(what, sizeof(what), "%s is %lu, expected %lu", name, (unsigned long)got, (unsigned long)expected);
-    fail(inst, fn, what);
-    return 1;
-}
-
-/* A non-finite computed value: logged, and the call returns fmi3Discard. */
-static fmi3Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
-    if (mw_all_finite(v, n)) return fmi3OK;
-    mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
-    return fmi3Discard;
-}
-
 
 /* The array behind a value reference other than time, or NULL after logging the error. */
 static const MwArray *lookup(MwInstance *inst, const char *fn, fmi3ValueReference vr) {
@@ -506,7 +462,7 @@ fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueRef
 /* --------------------------------------------------- functions not provided */
 
 static fmi3Status not_provided(fmi3Instance instance, const char *fn, const char *why) {
-    MwInstance *inst = enter(instance, fn, FOR_ANY, ALL_MODES);
+    MwInstance *inst = mw_enter(instance, fn, FOR_ANY, ALL_MODES, mode_name);
     if (inst == NULL) return fmi3Error;
     return fail(inst, fn, why);
 }

@@ -826,3 +826,54 @@ const char *mw_state_deserialize(MwInstance *inst, const unsigned char *in, size
     *state = snap;
     return NULL;
 }
+
+/* --------------------------------------------------------- argument checks */
+
+MwStatus mw_fail(MwInstance *inst, const char *fn, const char *what) {
+    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: %s", fn, what);
+    inst->mode = MW_MODE_ERROR;
+    return MW_ERROR;
+}
+
+MwInstance *mw_enter(void *c, const char *fn, int interface_type, unsigned int modes,
+                     const char *(*mode_name)(unsigned int mode)) {
+    MwInstance *inst = (MwInstance *)c;
+    if (inst == NULL) return NULL;
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s", fn);
+    if (interface_type == MW_FOR_ME && inst->type != MW_MODEL_EXCHANGE) {
+        mw_fail(inst, fn, "this function belongs to Model Exchange, the instance is Co-Simulation");
+        return NULL;
+    }
+    if (interface_type == MW_FOR_CS && inst->type != MW_CO_SIMULATION) {
+        mw_fail(inst, fn, "this function belongs to Co-Simulation, the instance is Model Exchange");
+        return NULL;
+    }
+    if ((inst->mode & modes) == 0) {
+        mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in mode \"%s\"", fn,
+               mode_name(inst->mode));
+        inst->mode = MW_MODE_ERROR;
+        return NULL;
+    }
+    return inst;
+}
+
+int mw_null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr) {
+    if (ptr != NULL) return 0;
+    mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
+    inst->mode = MW_MODE_ERROR;
+    return 1;
+}
+
+int mw_wrong_size(MwInstance *inst, const char *fn, const char *name, size_t got, size_t expected) {
+    char what[160];
+    if (got == expected) return 0;
+    snprintf(what, sizeof(what), "%s is %lu, expected %lu", name, (unsigned long)got, (unsigned long)expected);
+    mw_fail(inst, fn, what);
+    return 1;
+}
+
+MwStatus mw_non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
+    if (mw_all_finite(v, n)) return MW_OK;
+    mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
+    return MW_DISCARD;
+}

@@ -150,6 +150,11 @@ struct MwSnapshot {
 #define mw_serialize MW_SYMBOL(mw_serialize)
 #define mw_deserialize MW_SYMBOL(mw_deserialize)
 #define mw_mode_valid MW_SYMBOL(mw_mode_valid)
+#define mw_fail MW_SYMBOL(mw_fail)
+#define mw_enter MW_SYMBOL(mw_enter)
+#define mw_null_arg MW_SYMBOL(mw_null_arg)
+#define mw_wrong_size MW_SYMBOL(mw_wrong_size)
+#define mw_non_finite MW_SYMBOL(mw_non_finite)
 #define mw_state_get MW_SYMBOL(mw_state_get)
 #define mw_state_set MW_SYMBOL(mw_state_set)
 #define mw_state_free MW_SYMBOL(mw_state_free)
@@ -258,6 +263,25 @@ MW_HIDDEN void mw_serialize(const MwModel *model, const MwSnapshot *snap, unsign
 /* 0 on success, else a message saying what is wrong with the bytes. */
 MW_HIDDEN const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size_t size, MwSnapshot *snap);
 MW_HIDDEN int mw_mode_valid(const MwInstance *inst, unsigned int mode);
+
+/* The argument checks of both wrappers (fn: the calling FMI function, named in every message). */
+/* Log an error, enter the error mode, return MW_ERROR. */
+MW_HIDDEN MwStatus mw_fail(MwInstance *inst, const char *fn, const char *what);
+/* Interfaces a call belongs to (mw_enter). */
+enum { MW_FOR_ANY = 0, MW_FOR_ME = 1, MW_FOR_CS = 2 };
+/*
+ * The instance c if fn is legal for its interface and in its mode (a mask of MwMode bits), else NULL
+ * after logging why (and entering the error mode); NULL for a NULL c. mode_name names modes the
+ * wrapper's way.
+ */
+MW_HIDDEN MwInstance *mw_enter(void *c, const char *fn, int interface_type, unsigned int modes,
+                               const char *(*mode_name)(unsigned int mode));
+/* 1 (after logging, error mode) if ptr is NULL, else 0. */
+MW_HIDDEN int mw_null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr);
+/* 1 (after logging, error mode) if got differs from expected, else 0. */
+MW_HIDDEN int mw_wrong_size(MwInstance *inst, const char *fn, const char *name, size_t got, size_t expected);
+/* MW_DISCARD with a message if v[0..n-1] are not all finite (the one policy for computed values), else MW_OK. */
+MW_HIDDEN MwStatus mw_non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n);
 
 /*
  * The FMU-state calls of FMI 2.0 and 3.0 (Get, Set, Free, SerializedSize, Serialize, Deserialize):
