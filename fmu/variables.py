@@ -359,16 +359,9 @@ class VariableTable:
         attrs += [f'causality="{v.causality}"', f'variability="{v.variability}"']
         if v.initial is not None:
             attrs.append(f'initial="{v.initial}"')
-        if v.unit and one_unit:
-            attrs.append(f"unit={quoteattr(v.unit)}")
-        if v.derivative_of is not None:
-            attrs.append(f'derivative="{of_row[v.derivative_of].vr}"')
-        if v.start is not None:
-            attrs.append(f'start="{" ".join(_xml_number(r.start) for r in rows)}"')
-        if v.min is not None:
-            attrs.append(f'min="{_xml_number(v.min)}"')
-        if v.max is not None:
-            attrs.append(f'max="{_xml_number(v.max)}"')
+        attrs += _value_attrs(v.unit if one_unit else "",
+                              None if v.derivative_of is None else of_row[v.derivative_of].vr,
+                              None if v.start is None else " ".join(_xml_number(r.start) for r in rows), v.min, v.max)
         head = f"    <!-- vr {a.vr}: rows {a.first}..{a.first + a.count - 1} of the table -->\n"
         if a.scalar:
             return head + f"    <Float64 {' '.join(attrs)}/>"
@@ -485,17 +478,8 @@ class VariableTable:
         attrs += [f'causality="{v.causality}"', f'variability="{v.variability}"']
         if v.initial is not None:
             attrs.append(f'initial="{v.initial}"')
-        real = []
-        if v.unit:
-            real.append(f"unit={quoteattr(v.unit)}")
-        if v.derivative_of is not None:
-            real.append(f'derivative="{v.derivative_of + 1}"')
-        if v.start is not None:
-            real.append(f'start="{_xml_number(v.start)}"')
-        if v.min is not None:
-            real.append(f'min="{_xml_number(v.min)}"')
-        if v.max is not None:
-            real.append(f'max="{_xml_number(v.max)}"')
+        real = _value_attrs(v.unit, None if v.derivative_of is None else v.derivative_of + 1,
+                            None if v.start is None else _xml_number(v.start), v.min, v.max)
         return (f"    <!-- vr {v.vr}, index {v.xml_index} -->\n"
                 f"    <ScalarVariable {' '.join(attrs)}>\n"
                 f"      <Real {' '.join(real)}/>\n"
@@ -801,6 +785,21 @@ def _c_string(text: str) -> str:
 def _c_identifier(name: str) -> str:
     ident = re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_")
     return ident
+
+
+def _value_attrs(unit: str, derivative: int | None, start: str | None, lo: float | None, hi: float | None) -> list[str]:
+    """The value attributes of a variable: unit, derivative (an index in FMI 2.0, a value reference in 3.0),
+    start (one number, or an array's numbers), min and max."""
+    attrs = [f"unit={quoteattr(unit)}"] if unit else []
+    if derivative is not None:
+        attrs.append(f'derivative="{derivative}"')
+    if start is not None:
+        attrs.append(f'start="{start}"')
+    if lo is not None:
+        attrs.append(f'min="{_xml_number(lo)}"')
+    if hi is not None:
+        attrs.append(f'max="{_xml_number(hi)}"')
+    return attrs
 
 
 def _unknowns_xml(tag: str, unknowns: Sequence[Unknown]) -> str:

@@ -207,17 +207,10 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    int modes;
+    const char *problem;
     ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
-    mw_invalidate(inst);
-    modes = mw_start_modes(inst);
-    if (modes != 0)
-        return fail(inst, "fmi2ExitInitializationMode", modes == -1 ? "the model failed to compute the friction modes"
-                                                                    : "the initial friction modes did not settle");
-    if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
-        return fail(inst, "fmi2ExitInitializationMode", "the initial state and parameters give non-finite derivatives");
-    inst->mode = inst->type == MW_MODEL_EXCHANGE ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
-    return fmi2OK;
+    problem = mw_exit_initialization(inst);
+    return problem == NULL ? fmi2OK : fail(inst, "fmi2ExitInitializationMode", problem);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
@@ -452,14 +445,12 @@ fmi2Status fmi2EnterEventMode(fmi2Component c) {
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
-    int changed, x_changed, status;
+    int x_changed;
+    const char *problem;
     ENTER(NewDiscreteStates, FOR_ME, MODES_NewDiscreteStates);
     if (null_arg(inst, "fmi2NewDiscreteStates", "eventInfo", eventInfo)) return fmi2Error;
-    /* the friction modes follow the state, inputs and parameters: a joint sticks or breaks loose */
-    status = mw_settle_modes(inst, &changed, &x_changed);
-    if (status != 0)
-        return fail(inst, "fmi2NewDiscreteStates", status == -1 ? "the model failed to update the friction modes"
-                                                                 : "the friction modes did not settle");
+    problem = mw_event_update(inst, &x_changed);
+    if (problem != NULL) return fail(inst, "fmi2NewDiscreteStates", problem);
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
@@ -494,25 +485,11 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    const char *problem;
     char what[192];
     ENTER(SetTime, FOR_ME, MODES_SetTime);
-    if (!isfinite(time)) return fail(inst, "fmi2SetTime", "time is not finite");
-    /* Past stopTime: an error in event mode. In continuous-time mode an integrator may try points past
-       it inside a step that it then interpolates back (CVode does); the step is refused only if it is
-       accepted there (fmi2CompletedIntegratorStep). */
-    if (inst->mode == MW_MODE_EVENT && mw_past_stop_time(inst, time)) {
-        snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g of fmi2SetupExperiment", time,
-                 inst->stop_time);
-        return fail(inst, "fmi2SetTime", what);
-    }
-    /* in event mode time stands still or moves on to the event; it never goes back */
-    if (inst->mode == MW_MODE_EVENT && time < inst->time && !mw_is_close(time, inst->time)) {
-        snprintf(what, sizeof(what), "time %.17g is before the current time %.17g: in event mode time may not go back",
-                 time, inst->time);
-        return fail(inst, "fmi2SetTime", what);
-    }
-    inst->time = time;
-    return fmi2OK;
+    problem = mw_set_time(inst, time, what, sizeof(what));
+    return problem == NULL ? fmi2OK : fail(inst, "fmi2SetTime", problem);
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {

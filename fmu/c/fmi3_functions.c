@@ -258,18 +258,10 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
-    const char *fn = "fmi3ExitInitializationMode";
-    int modes;
+    const char *problem;
     ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
-    mw_invalidate(inst);
-    modes = mw_start_modes(inst);
-    if (modes != 0)
-        return fail(inst, fn, modes == -1 ? "the model failed to compute the friction modes"
-                                          : "the initial friction modes did not settle");
-    if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
-        return fail(inst, fn, "the initial state and parameters give non-finite derivatives");
-    inst->mode = inst->type == MW_MODEL_EXCHANGE ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
-    return fmi3OK;
+    problem = mw_exit_initialization(inst);
+    return problem == NULL ? fmi3OK : fail(inst, "fmi3ExitInitializationMode", problem);
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
@@ -716,7 +708,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
                                     fmi3Float64 *nextEventTime) {
     const char *fn = "fmi3UpdateDiscreteStates";
-    int changed, x_changed, status;
+    const char *problem;
+    int x_changed;
     ENTER(UpdateDiscreteStates, FOR_ME, MODES_UpdateDiscreteStates);
     if (null_arg(inst, fn, "discreteStatesNeedUpdate", discreteStatesNeedUpdate) ||
         null_arg(inst, fn, "terminateSimulation", terminateSimulation) ||
@@ -725,11 +718,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
         null_arg(inst, fn, "nextEventTimeDefined", nextEventTimeDefined) ||
         null_arg(inst, fn, "nextEventTime", nextEventTime))
         return fmi3Error;
-    /* the friction modes follow the state, inputs and parameters: a joint sticks or breaks loose */
-    status = mw_settle_modes(inst, &changed, &x_changed);
-    if (status != 0)
-        return fail(inst, fn, status == -1 ? "the model failed to update the friction modes"
-                                           : "the friction modes did not settle");
+    problem = mw_event_update(inst, &x_changed);
+    if (problem != NULL) return fail(inst, fn, problem);
     *discreteStatesNeedUpdate = fmi3False;
     *terminateSimulation = fmi3False;
     *nominalsOfContinuousStatesChanged = fmi3False;
@@ -765,20 +755,11 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
+    const char *problem;
     char what[192];
     ENTER(SetTime, FOR_ME, MODES_SetTime);
-    if (!isfinite(time)) return fail(inst, "fmi3SetTime", "time is not finite");
-    if (inst->mode == MW_MODE_EVENT && mw_past_stop_time(inst, time)) {
-        snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g", time, inst->stop_time);
-        return fail(inst, "fmi3SetTime", what);
-    }
-    if (inst->mode == MW_MODE_EVENT && time < inst->time && !mw_is_close(time, inst->time)) {
-        snprintf(what, sizeof(what), "time %.17g is before the current time %.17g: in Event Mode time may not go back",
-                 time, inst->time);
-        return fail(inst, "fmi3SetTime", what);
-    }
-    inst->time = time;
-    return fmi3OK;
+    problem = mw_set_time(inst, time, what, sizeof(what));
+    return problem == NULL ? fmi3OK : fail(inst, "fmi3SetTime", problem);
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],

@@ -877,3 +877,44 @@ MwStatus mw_non_finite(MwInstance *inst, const char *fn, const char *what, const
     mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
     return MW_DISCARD;
 }
+
+/* ------------------------------------------------ mode changes of both versions */
+
+const char *mw_exit_initialization(MwInstance *inst) {
+    int modes;
+    mw_invalidate(inst);
+    modes = mw_start_modes(inst);
+    if (modes != 0)
+        return modes == -1 ? "the model failed to compute the friction modes" : "the initial friction modes did not settle";
+    if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
+        return "the initial state and parameters give non-finite derivatives";
+    inst->mode = inst->type == MW_MODEL_EXCHANGE ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
+    return NULL;
+}
+
+const char *mw_set_time(MwInstance *inst, double time, char *what, size_t len) {
+    if (!isfinite(time)) return "time is not finite";
+    /* Past stopTime: an error in event mode. In continuous-time mode an integrator may try points past
+       it inside a step that it then interpolates back (CVode does); the step is refused only if it is
+       accepted there (CompletedIntegratorStep). */
+    if (inst->mode == MW_MODE_EVENT && mw_past_stop_time(inst, time)) {
+        snprintf(what, len, "time %.17g is past the stopTime %.17g of the experiment", time, inst->stop_time);
+        return what;
+    }
+    /* in event mode time stands still or moves on to the event; it never goes back */
+    if (inst->mode == MW_MODE_EVENT && time < inst->time && !mw_is_close(time, inst->time)) {
+        snprintf(what, len, "time %.17g is before the current time %.17g: in event mode time may not go back", time,
+                 inst->time);
+        return what;
+    }
+    inst->time = time;
+    return NULL;
+}
+
+const char *mw_event_update(MwInstance *inst, int *x_changed) {
+    int changed, status;
+    /* the friction modes follow the state, inputs and parameters: a joint sticks or breaks loose */
+    status = mw_settle_modes(inst, &changed, x_changed);
+    if (status == 0) return NULL;
+    return status == -1 ? "the model failed to update the friction modes" : "the friction modes did not settle";
+}

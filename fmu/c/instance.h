@@ -151,6 +151,9 @@ struct MwSnapshot {
 #define mw_deserialize MW_SYMBOL(mw_deserialize)
 #define mw_mode_valid MW_SYMBOL(mw_mode_valid)
 #define mw_fail MW_SYMBOL(mw_fail)
+#define mw_exit_initialization MW_SYMBOL(mw_exit_initialization)
+#define mw_set_time MW_SYMBOL(mw_set_time)
+#define mw_event_update MW_SYMBOL(mw_event_update)
 #define mw_enter MW_SYMBOL(mw_enter)
 #define mw_null_arg MW_SYMBOL(mw_null_arg)
 #define mw_wrong_size MW_SYMBOL(mw_wrong_size)
@@ -263,6 +266,16 @@ MW_HIDDEN void mw_serialize(const MwModel *model, const MwSnapshot *snap, unsign
 /* 0 on success, else a message saying what is wrong with the bytes. */
 MW_HIDDEN const char *mw_deserialize(const MwInstance *inst, const unsigned char *in, size_t size, MwSnapshot *snap);
 MW_HIDDEN int mw_mode_valid(const MwInstance *inst, unsigned int mode);
+
+/*
+ * The version-neutral parts of ExitInitializationMode (start and settle the friction modes, check the
+ * derivatives, enter Event Mode or Step Mode), SetTime (finite, not past stopTime in Event Mode, not
+ * back in time in Event Mode) and the event update (NewDiscreteStates, UpdateDiscreteStates: settle
+ * the friction modes, *x_changed whether the states jumped): NULL, or what is wrong.
+ */
+MW_HIDDEN const char *mw_exit_initialization(MwInstance *inst);
+MW_HIDDEN const char *mw_set_time(MwInstance *inst, double time, char *what, size_t len);
+MW_HIDDEN const char *mw_event_update(MwInstance *inst, int *x_changed);
 
 /* The argument checks of both wrappers (fn: the calling FMI function, named in every message). */
 /* Log an error, enter the error mode, return MW_ERROR. */
