@@ -396,3 +396,72 @@ def test_fmi3_lifecycle_under_valgrind():
     assert "soak: 20 repetitions, 0 failures" in proc.stdout
     assert re.search(r"ERROR SUMMARY: 0 errors from 0 contexts", report)
     shutil.rmtree(unzip, ignore_errors=True)
+
+
+def test_fmi3_pid_controller_fmu_ticks_its_integrator(tmp_path):
+    """The sampled discrete states through the FMI 3.0 wrapper: the PID controller FMU validates, is
+    Co-Simulation only, ticks once per period (two periods in one step = two steps of one), carries z in its
+    serialised state and refuses a step that is no whole number of periods; its torques equal the Python
+    PID controller's with the integrator carried (0 seen, bound 1e-12)."""
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Model, FMU3Slave
+    from fmpy.validation import validate_fmu
+
+    from closed_loop import controller_spec
+    from control_design import design_robot
+    from control_design.reference import Reference
+    from fmu import build_fmu
+    from model import load_robot
+
+    robot = _quiet(load_robot, "scara")
+    controller = design_robot(robot, "pid", analyse=False).controller(1000.0)
+    path = build_fmu(controller_spec(controller, robot), tmp_path / "pid3.fmu", fmi_version=3)
+    assert validate_fmu(str(path)) == []
+    md = _md(path)
+    assert md.modelExchange is None
+    unzip = extract(str(path))
+    vr = {nm: _vr(md, nm) for nm in ("q_ref", "qd_ref", "q", "qd", "tau_m", "z")}
+
+    def slave(name):
+        s = FMU3Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=name)
+        s.instantiate()
+        s.enterInitializationMode(startTime=0.0)
+        s.exitInitializationMode()
+        return s
+
+    q_ref = np.array([0.1, 0.2, 0.05, 0.3])
+    signals = [q_ref, np.zeros(4), q_ref - 1e-6 * np.arange(1, 5), np.zeros(4)]
+    a, b = slave("a"), slave("b")
+    for s in (a, b):
+        s.setFloat64([vr["q_ref"], vr["qd_ref"], vr["q"], vr["qd"]], list(np.concatenate(signals)))
+    a.doStep(0.0, 2e-3)
+    b.doStep(0.0, 1e-3)
+    b.doStep(1e-3, 1e-3)
+    za = np.array(a.getFloat64([vr["z"]], 4))
+    assert np.array_equal(za, np.array(b.getFloat64([vr["z"]], 4))) and np.all(za != 0)
+    blob = a.serializeFMUState(a.getFMUState())
+    a.doStep(2e-3, 1e-3)
+    a.setFMUState(a.deserializeFMUState(blob))
+    assert np.array_equal(np.array(a.getFloat64([vr["z"]], 4)), za)
+    with pytest.raises(Exception):
+        b.doStep(2e-3, 1.5e-3)
+    # the torques against the Python controller over 50 periods of a moving reference
+    controller.reset()
+    c = slave("c")
+    worst = 0.0
+    for k in range(50):
+        qr = q_ref + 0.01 * np.sin(0.1 * k)
+        q, qd = qr - 1e-4 * np.cos(0.2 * k + np.arange(4)), 1e-3 * np.sin(0.3 * k + np.arange(4))
+        c.setFloat64([vr["q_ref"], vr["qd_ref"], vr["q"], vr["qd"]], list(np.concatenate([qr, np.zeros(4), q, qd])))
+        tau = np.array(c.getFloat64([vr["tau_m"]], 4))
+        c.doStep(k * 1e-3, 1e-3)
+        py = controller.update(k * 1e-3, q, qd, Reference(qr, np.zeros(4), np.zeros(4)))
+        worst = max(worst, float(np.max(np.abs(tau - py) / (1 + np.abs(py)))))
+    assert worst <= 1e-12
+    for s in (a, b, c):
+        s.freeInstance()
+    me = FMU3Model(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                   instanceName="me")
+    with pytest.raises(Exception, match="instantiate"):
+        me.instantiate()
