@@ -1,4 +1,4 @@
-"""Controller FMUs: the control laws of :mod:`control_design.laws` as stateless FMI 2.0 FMUs.
+"""Controller FMUs: the control laws of :mod:`control_design.laws` as FMI 2.0 FMUs.
 
 A controller FMU is built by the same variable table (:mod:`fmu.variables`) and
 C wrapper (``fmu/c/``) as the plant: a :class:`~fmu.variables.ModelSpec` with no
@@ -24,8 +24,18 @@ output            ``tau_m[i]``, motor torque, N m
 ================  ==========================================================
 
 A controller without saturation gets :data:`~control_design.laws.NO_LIMIT` as
-its limit (a no-op on finite torques). The PID law has an integrator state;
-the FMU wrapper has continuous states only, so it is not exported.
+its limit (a no-op on finite torques).
+
+'pid' has the parameters of 'pd' plus ``Ki[i]`` (N m/(rad s)), and its
+integrator ``z[i]`` (motor rad s) is a sampled discrete state of the FMU
+(:class:`fmu.variables.DiscreteStates`): ``tau_m`` is computed from ``z_k``
+and the inputs, and each sample period (``1 / rate_hz``, baked in as the law's
+``dt``) ``fmi2DoStep`` ticks ``z_{k+1} = z_next(inputs, z_k)`` (conditional
+integration against wind-up), exactly as the Python controller's ``update``.
+A communication step must be a whole number of periods (each a tick, inputs
+held); any other step is ``fmi2Error``. The PID FMU is Co-Simulation only: its
+state changes on a clock, which FMI 2.0 Model Exchange can only approximate
+by time events whose inputs the importer may already have changed.
 """
 
 from __future__ import annotations
@@ -47,7 +57,7 @@ from control_design.design import RobotDesign
 from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
 from fmu.build import build_fmu
-from fmu.variables import ModelSpec, Quantity
+from fmu.variables import DiscreteStates, ModelSpec, Quantity
 from model.robot import Robot
 
 __all__ = [
@@ -61,9 +71,9 @@ __all__ = [
 ]
 
 #: Controller kinds a controller FMU can carry.
-CONTROLLER_FMU_KINDS: tuple[str, ...] = ("pd", "pd-g", "pd-ff", "ct")
+CONTROLLER_FMU_KINDS: tuple[str, ...] = ("pd", "pd-g", "pd-ff", "pid", "ct")
 
-_NAME_PATTERN = re.compile(r"^(?P<robot>.+) (?P<kind>pd|pd-g|pd-ff|ct) controller$")
+_NAME_PATTERN = re.compile(r"^(?P<robot>.+) (?P<kind>pd|pd-g|pd-ff|pid|ct) controller$")
 
 #: The law in words, for the FMU description.
 _LAW_TEXT = {
@@ -72,6 +82,8 @@ _LAW_TEXT = {
              " + J_ff_m G qdd_ref + B_ff_m G qd_ref",
     "pd-g": "decentralised PD on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd) + g(q) / G",
     "ct": "computed torque tau_m = rne(q, qd, qdd_ref + Kd (qd_ref - qd) + Kp (q_ref - q)) / G",
+    "pid": "decentralised PID on the motor angle tau_m = Kp G (q_ref - q) + Kd G (qd_ref - qd) + Ki z, "
+           "z_next = z + dt G (q_ref - q) once per period unless the saturated output winds up",
 }
 #: FMU parameter order (the law's inputs are matched by name).
 _PARAMETER_ORDER = ("Kp", "Kd", "Ki", "gear_ratio", "tau_m_max", "J_ff_m", "B_ff_m", "p_model")
@@ -107,6 +119,8 @@ def _vector_parameter(name: str, kind: str, robot: Robot) -> tuple[list[str], st
     if name == "Kp":
         return (["1/s2"] * n, "outer-loop proportional gain (wn^2)", None) if kind == "ct" else \
             (["N.m/rad"] * n, "motor-side proportional gain", None)
+    if name == "Ki":
+        return ["N.m.s-1/rad"] * n, "motor-side integral gain", None
     if name == "Kd":
         return (["1/s"] * n, "outer-loop derivative gain (2 zeta wn)", None) if kind == "ct" else \
             (["N.m.s/rad"] * n, "motor-side derivative gain", None)
@@ -123,13 +137,14 @@ def _vector_parameter(name: str, kind: str, robot: Robot) -> tuple[list[str], st
 
 
 def controller_spec(controller: Controller, robot: Robot, *, model_identifier: str | None = None) -> ModelSpec:
-    """The :class:`~fmu.variables.ModelSpec` of a stateless controller FMU running ``controller``'s law.
+    """The :class:`~fmu.variables.ModelSpec` of a controller FMU running ``controller``'s law.
 
     Parameters
     ----------
     controller
-        A :class:`~control_design.controllers.DecentralisedController` of kind 'pd', 'pd-g' or
-        'pd-ff', or a :class:`~control_design.controllers.ComputedTorqueController`; its Function
+        A :class:`~control_design.controllers.DecentralisedController` of kind 'pd', 'pd-g',
+        'pd-ff' or 'pid' (its integrator a sampled discrete state, period ``1 / rate_hz``), or a
+        :class:`~control_design.controllers.ComputedTorqueController`; its Function
         (law and saturation) is the FMU's output function, its parameter values (gains, gear
         ratios, limits, model parameters) the FMU's parameter start values, its rate (Hz) the
         FMU's default communication step ``1 / rate_hz`` (s).
@@ -141,7 +156,7 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
     Raises
     ------
     ValueError
-        A PID controller (it has a state), a kind not in :data:`CONTROLLER_FMU_KINDS`, or a joint
+        A kind not in :data:`CONTROLLER_FMU_KINDS`, or a joint
         count that differs from the robot's.
     """
     kind = controller.kind
@@ -181,7 +196,10 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
     p_min: list[float | None] = []
     p_max: list[float | None] = []
     p_parts: list[ca.SX] = []
-    for name in sorted(values, key=_PARAMETER_ORDER.index):
+    for name in sorted(values, key=lambda k: _PARAMETER_ORDER.index(k) if k in _PARAMETER_ORDER else -1):
+        if name == "dt":  # the PID law's period: the FMU's sample period, a constant of its C
+            args[name] = ca.SX(float(values[name][0]))
+            continue
         if name == "p_model":
             model = controller.model if isinstance(controller, ComputedTorqueController) else \
                 controller.gravity_model  # type: ignore[attr-defined]
@@ -201,13 +219,26 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
             p_max += [None] * n
         args[name] = ca.SX.sym(name, values[name].size)
         p_parts.append(args[name])
+    discrete = None
+    if law.states:  # 'pid': the integrator z, a sampled discrete state
+        args["z"] = ca.SX.sym("z", n)
     y = function(*[args[function.name_in(i)] for i in range(function.n_in())])
 
     x = ca.SX.sym("x", 0)
     u = ca.vertcat(*u_parts)
     p = ca.vertcat(*p_parts)
-    ode = ca.Function("ode", [x, u, p], [ca.SX(0, 1)], ["x", "u", "p"], ["xdot"])
-    out = ca.Function("out", [x, u, p], [ca.densify(y)], ["x", "u", "p"], ["y"])
+    if law.states:
+        tau, z_next = y
+        d = args["z"]
+        ode = ca.Function("ode", [x, u, p, d], [ca.SX(0, 1)], ["x", "u", "p", "d"], ["xdot"])
+        out = ca.Function("out", [x, u, p, d], [ca.densify(tau)], ["x", "u", "p", "d"], ["y"])
+        tick = ca.Function("tick", [x, u, p, d], [ca.densify(z_next)], ["x", "u", "p", "d"], ["d_next"])
+        states = tuple(Quantity(f"z[{i + 1}]", "rad.s", f"integrator of the motor-angle error of joint {i + 1} "
+                                f"({names[i]}), sampled") for i in idx)
+        discrete = DiscreteStates(states, np.zeros(n), float(values["dt"][0]), tick)
+    else:
+        ode = ca.Function("ode", [x, u, p], [ca.SX(0, 1)], ["x", "u", "p"], ["xdot"])
+        out = ca.Function("out", [x, u, p], [ca.densify(y)], ["x", "u", "p"], ["y"])
     outputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque of joint {i + 1} ({names[i]}), saturated")
                     for i in idx)
     ident = model_identifier or re.sub(r"\W", "_", f"{robot.name}_{kind}_controller")
@@ -216,7 +247,8 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
     return ModelSpec(
         model_identifier=ident,
         model_name=f"{robot.name} {kind} controller",
-        description=(f"{kind} controller of {robot.name} sampled at {controller.rate_hz:g} Hz (stateless, direct "
+        description=(f"{kind} controller of {robot.name} sampled at {controller.rate_hz:g} Hz "
+                     f"({'integrator a sampled state' if discrete else 'stateless'}, direct "
                      f"feedthrough): {_LAW_TEXT[kind]}, saturated at +-tau_m_max"),
         ode=ode, out=out,
         states=(), x_start=np.zeros(0),
@@ -225,13 +257,15 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
         p_max=tuple(p_max),
         outputs=outputs, output_state=(-1,) * n,
         step=controller.dt,
+        discrete=discrete,
     )
 
 
 def export_controller_fmu(design: RobotDesign | Controller, path: str | os.PathLike[str], *,
                           rate_hz: float | None = None, robot: Robot | None = None, saturate: bool = True,
                           progress: Progress | None = None) -> Path:
-    """Export the controller of ``design`` as a stateless FMI 2.0 FMU (Co-Simulation and Model Exchange).
+    """Export the controller of ``design`` as an FMI 2.0 FMU (Co-Simulation and Model Exchange; 'pid':
+    Co-Simulation only, its integrator a sampled discrete state).
 
     Parameters
     ----------
@@ -258,7 +292,7 @@ def export_controller_fmu(design: RobotDesign | Controller, path: str | os.PathL
     Raises
     ------
     ValueError
-        PID controller, missing robot, joint counts that differ.
+        Missing robot, joint counts that differ.
     fmu.build.FmuBuildError
         The generated C did not compile.
     """

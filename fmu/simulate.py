@@ -6,6 +6,11 @@ step table (two rows at every switching time), so FMPy applies the value
 after the switch in Co-Simulation and raises a time event at every switch in
 Model Exchange. Results come back as a :class:`SimulationResult` of arrays.
 Every FMU passes :func:`fmu.archive.check_fmu_archive` before FMPy opens it.
+
+Names are the scalar names of the variable table (``tau_m[1]``, ``q[2]``) for
+FMI 2.0 and FMI 3.0 alike: for an FMI 3.0 FMU, whose joint vectors are array
+variables, the input table's columns ``tau_m[1..n]`` are joined into one array
+column ``tau_m`` and the array outputs are split back into their elements.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from fmpy import read_model_description, simulate_fmu
 
 from .archive import check_fmu_archive
 
-__all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names"]
+__all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names", "fmi_version"]
 
 
 @dataclass(frozen=True)
@@ -38,11 +43,67 @@ class SimulationResult:
         return np.column_stack([self.values[n] for n in names])
 
 
+def fmi_version(fmu_path: str | os.PathLike[str]) -> int:
+    """2 or 3: the major FMI version of the FMU's ``modelDescription.xml``."""
+    check_fmu_archive(fmu_path)
+    return int(read_model_description(str(fmu_path)).fmiVersion.split(".")[0])
+
+
+def _sizes(fmu_path: str | os.PathLike[str]) -> dict[str, int]:
+    """Number of elements of every variable (1 for a scalar) by name."""
+    md = read_model_description(str(fmu_path))
+    return {v.name: int(np.prod([d.start for d in v.dimensions])) if v.dimensions else 1 for v in md.modelVariables}
+
+
 def variable_names(fmu_path: str | os.PathLike[str], causality: str) -> list[str]:
-    """Names of the FMU's variables of one causality, in value-reference order."""
+    """Scalar names of the FMU's variables of one causality (``q[1]`` .. for an FMI 3.0 array ``q``)."""
     check_fmu_archive(fmu_path)
     md = read_model_description(str(fmu_path))
-    return [v.name for v in sorted(md.modelVariables, key=lambda v: v.valueReference) if v.causality == causality]
+    names = []
+    for v in sorted(md.modelVariables, key=lambda v: v.valueReference):
+        if v.causality != causality:
+            continue
+        size = int(np.prod([d.start for d in v.dimensions])) if v.dimensions else 0
+        names += [f"{v.name}[{k}]" for k in range(1, size + 1)] if size else [v.name]
+    return names
+
+
+def _base(name: str) -> str:
+    return name.split("[", 1)[0]
+
+
+def _array_inputs(table: np.ndarray | None, sizes: dict[str, int]) -> np.ndarray | None:
+    """An input table with columns ``x[1..k]`` joined into one array column ``x`` (FMI 3.0)."""
+    if table is None:
+        return None
+    columns: dict[str, list[str]] = {}
+    for name in table.dtype.names[1:]:
+        columns.setdefault(_base(name) if sizes.get(_base(name), 1) > 1 else name, []).append(name)
+    dtype = [("time", np.float64)] + [(b, np.float64, (len(c),)) if len(c) > 1 or sizes.get(b, 1) > 1 else (b, np.float64)
+                                      for b, c in columns.items()]
+    out = np.zeros(table.shape, dtype=dtype)
+    out["time"] = table["time"]
+    for b, c in columns.items():
+        out[b] = np.column_stack([table[n] for n in c]) if out[b].ndim > 1 else table[c[0]]
+    return out
+
+
+def _run(fmu_path: str | os.PathLike[str], names: list[str], inputs: np.ndarray | None, **kwargs) -> dict[str, np.ndarray]:
+    """FMPy's simulate_fmu, with scalar names for FMI 2.0 and 3.0: {"time": t, name: values}."""
+    if fmi_version(fmu_path) < 3:
+        raw = simulate_fmu(str(fmu_path), input=inputs, output=names, **kwargs)
+        return {n: np.array(raw[n]) for n in ["time", *names]}
+    sizes = _sizes(fmu_path)
+    bases = list(dict.fromkeys(_base(n) if sizes.get(_base(n), 1) > 1 else n for n in names))
+    raw = simulate_fmu(str(fmu_path), input=_array_inputs(inputs, sizes), output=bases, **kwargs)
+    values = {"time": np.array(raw["time"])}
+    for n in names:
+        b = _base(n)
+        if sizes.get(b, 1) > 1:
+            values[n] = np.array(raw[b][:, int(n[len(b) + 1:-1]) - 1])
+        else:
+            values[n] = np.array(raw[n])
+    return values
 
 
 def step_input(names: Sequence[str], t_switch: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -70,8 +131,8 @@ def step_input(names: Sequence[str], t_switch: np.ndarray, values: np.ndarray) -
     return table
 
 
-def _result(raw: np.ndarray, names: Sequence[str], interface: str) -> SimulationResult:
-    return SimulationResult(np.array(raw["time"]), {n: np.array(raw[n]) for n in names}, interface)
+def _result(raw: dict[str, np.ndarray], names: Sequence[str], interface: str) -> SimulationResult:
+    return SimulationResult(raw["time"], {n: raw[n] for n in names}, interface)
 
 
 def simulate_cs(fmu_path: str | os.PathLike[str], stop_time: float, step: float, *,
@@ -80,8 +141,8 @@ def simulate_cs(fmu_path: str | os.PathLike[str], stop_time: float, step: float,
     """Co-Simulation by FMPy with communication step ``step`` (s), outputs every step."""
     check_fmu_archive(fmu_path)
     names = list(outputs) if outputs is not None else variable_names(fmu_path, "output")
-    raw = simulate_fmu(str(fmu_path), fmi_type="CoSimulation", stop_time=stop_time, output_interval=step,
-                       input=inputs, output=names, start_values=start_values or {})
+    raw = _run(fmu_path, names, inputs, fmi_type="CoSimulation", stop_time=stop_time, output_interval=step,
+               start_values=start_values or {})
     return _result(raw, names, "CoSimulation")
 
 
@@ -91,7 +152,7 @@ def simulate_me(fmu_path: str | os.PathLike[str], stop_time: float, output_inter
     """Model Exchange by FMPy with its CVode solver (BDF, Newton) at ``relative_tolerance``."""
     check_fmu_archive(fmu_path)
     names = list(outputs) if outputs is not None else variable_names(fmu_path, "output")
-    raw = simulate_fmu(str(fmu_path), fmi_type="ModelExchange", solver="CVode", stop_time=stop_time,
-                       output_interval=output_interval, relative_tolerance=relative_tolerance,
-                       input=inputs, output=names, start_values=start_values or {})
+    raw = _run(fmu_path, names, inputs, fmi_type="ModelExchange", solver="CVode", stop_time=stop_time,
+               output_interval=output_interval, relative_tolerance=relative_tolerance,
+               start_values=start_values or {})
     return _result(raw, names, "ModelExchange")

@@ -13,7 +13,12 @@ templates in ``fmu/templates/``:
 * ``model_data.c``, the model contract of ``fmu/c/model.h`` (:meth:`VariableTable.model_data_c`).
 
 Value references are the row numbers of the table, so the wrapper finds a
-variable in O(1) and nothing is kept by hand in two places.
+variable in O(1) and nothing is kept by hand in two places. FMI 2.0 exposes
+every row as a ScalarVariable; FMI 3.0 groups consecutive rows ``name[1]`` ..
+``name[k]`` of the same attributes into one array variable ``name`` with
+``<Dimension start="k"/>`` (:meth:`VariableTable.arrays`), value reference
+``1 + its position`` (0 is ``time``); both are rendered from the same rows,
+and the C side gets both (``MwVariable`` rows and ``MwArray`` groups).
 """
 
 from __future__ import annotations
@@ -37,9 +42,12 @@ __all__ = [
     "substeps",
     "Quantity",
     "ModelSpec",
+    "DiscreteStates",
     "Variable",
     "Unknown",
     "VariableTable",
+    "ArrayVariable",
+    "FMI3_TIME_VR",
     "build_table",
     "spec_from_plant",
     "trivial_spec",
@@ -57,6 +65,9 @@ MIN_STEP = 1e-6
 MAX_SUBSTEPS = 1_000_000
 #: Relative noise of ``h / internal_step`` forgiven when counting sub-steps (``MW_SUBSTEP_RTOL``).
 SUBSTEP_RTOL = 1e-8
+
+#: Value reference of the independent variable ``time`` in FMI 3.0 (the arrays follow from 1).
+FMI3_TIME_VR = 0
 
 # Names of the FMI variables that the table itself chooses.
 _STRUCTURED = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+(,\d+)*\])?)*")
@@ -92,6 +103,30 @@ class Quantity:
 
 
 @dataclass(frozen=True)
+class DiscreteStates:
+    """Sampled discrete states ``d`` of a model: ``d <- tick(x, u, p, d)`` once per ``period`` s.
+
+    The tick runs at the start of every period with the inputs held over it (zero-order hold), as a
+    digital controller updates its integrator after computing its output; ``d`` is never iterated
+    at events (unlike the friction modes). A model with sampled states is Co-Simulation only.
+    """
+
+    states: tuple[Quantity, ...]
+    start: np.ndarray
+    period: float
+    tick: ca.Function  # (x, u, p, d) -> d_next
+
+    def __post_init__(self) -> None:
+        nd = len(self.states)
+        if np.shape(self.start) != (nd,) or not np.all(np.isfinite(self.start)):
+            raise ValueError(f"discrete.start: expected {nd} finite values, got {np.asarray(self.start).tolist()}")
+        if not (math.isfinite(self.period) and self.period > 0):
+            raise ValueError(f"discrete.period: expected a positive sample period in s, got {self.period!r}")
+        if self.tick.n_in() != 4 or self.tick.numel_in(3) != nd or self.tick.numel_out(0) != nd:
+            raise ValueError(f"discrete.tick: expected (x, u, p, d) -> d_next with {nd} sampled states")
+
+
+@dataclass(frozen=True)
 class ModelSpec:
     """What an FMU is built from.
 
@@ -100,6 +135,7 @@ class ModelSpec:
     u, p and y. ``output_state[k]`` is the index of the state that output k
     equals (such outputs are exposed as the state variable itself), or -1.
     ``step`` is the default internal step of the co-simulation integrator.
+    With ``discrete`` (:class:`DiscreteStates`), ``ode`` and ``out`` take a fourth input ``d``.
     """
 
     model_identifier: str
@@ -124,6 +160,7 @@ class ModelSpec:
     robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
     robot_json: str = ""    # the whole description (fmu.robot_resource), shipped as resources/robot.json
     modes: Any = None       # fmu.friction_modes.FrictionModes of the stick-slip friction, or None (no modes)
+    discrete: DiscreteStates | None = None  # sampled discrete states (a digital controller's integrator), or None
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
@@ -135,6 +172,12 @@ class ModelSpec:
         for key in expected:
             if got[key] != expected[key]:
                 raise ValueError(f"{key}: expected sizes (x, u, p) = {expected[key]}, got {got[key]}")
+        n_in = 4 if self.discrete is not None else 3
+        if self.ode.n_in() != n_in or self.out.n_in() != n_in:
+            raise ValueError(f"ode, out: expected {n_in} inputs (x, u, p{', d' if n_in == 4 else ''}), got "
+                             f"{self.ode.n_in()} and {self.out.n_in()}")
+        if self.discrete is not None and self.modes is not None:
+            raise ValueError("discrete: a model with sampled states has no friction modes")
         if self.ode.numel_out(0) != nx:
             raise ValueError(f"ode output: expected {nx} entries, got {self.ode.numel_out(0)}")
         if self.out.numel_out(0) != ny:
@@ -163,7 +206,7 @@ class Variable:
 
     name: str
     vr: int
-    kind: str            # state, derivative, input, parameter, output, step
+    kind: str            # state, derivative, input, parameter, output, step, indicator
     index: int           # position in x, xdot, u, p or y
     causality: str
     variability: str
@@ -179,6 +222,37 @@ class Variable:
     @property
     def xml_index(self) -> int:
         return self.vr + 1
+
+
+@dataclass(frozen=True)
+class ArrayVariable:
+    """One FMI 3.0 variable: rows ``first .. first + count - 1`` of the table; ``scalar``: no ``<Dimension>``."""
+
+    name: str
+    vr: int
+    first: int
+    count: int
+    scalar: bool
+
+    def rows(self) -> range:
+        return range(self.first, self.first + self.count)
+
+
+_ELEMENT = re.compile(r"(der\()?([A-Za-z_][A-Za-z0-9_.]*)\[(\d+)\](\))?")
+
+
+def _element(name: str) -> tuple[str, int] | None:
+    """``("q", 2)`` for ``q[2]``, ``("der(q)", 1)`` for ``der(q[1])``; None for a name that is no element."""
+    m = _ELEMENT.fullmatch(name)
+    if m is None or bool(m.group(1)) != bool(m.group(4)):
+        return None
+    base = f"der({m.group(2)})" if m.group(1) else m.group(2)
+    return base, int(m.group(3))
+
+
+def _group_key(v: "Variable") -> tuple[Any, ...]:
+    """What the elements of one FMI 3.0 array must share (not the unit: a joint vector mixes rad and m)."""
+    return (v.kind, v.causality, v.variability, v.initial, v.settable, v.min, v.max, v.derivative_of is not None)
 
 
 @dataclass(frozen=True)
@@ -207,7 +281,92 @@ class VariableTable:
                 return v.vr
         raise KeyError(f"no FMU variable named {name!r}")
 
+    def arrays(self) -> tuple[ArrayVariable, ...]:
+        """The FMI 3.0 variables: runs of rows ``base[1] .. base[k]`` of equal attributes, else single rows."""
+        groups: list[ArrayVariable] = []
+        rows = self.variables
+        i = 0
+        while i < len(rows):
+            el = _element(rows[i].name)
+            j = i + 1
+            if el is not None and el[1] == 1:
+                while (j < len(rows) and _element(rows[j].name) == (el[0], j - i + 1)
+                       and _group_key(rows[j]) == _group_key(rows[i])):
+                    j += 1
+            name = el[0] if el is not None and el[1] == 1 else rows[i].name
+            groups.append(ArrayVariable(name, FMI3_TIME_VR + 1 + len(groups), i, j - i,
+                                        scalar=el is None or el[1] != 1))
+            i = j
+        names = [g.name for g in groups]
+        if len(set(names)) != len(names) or "time" in names:
+            raise ValueError(f"FMI 3.0 variables: expected unique array names besides 'time', got {names}")
+        return tuple(groups)
+
     # ------------------------------------------------------------ rendering
+    def model_description_fmi3(self, guid: str, source_files: Sequence[str], version: str) -> str:
+        """The text of the FMI 3.0 ``modelDescription.xml`` (array variables, one value reference each)."""
+        spec = self.spec
+        arrays = self.arrays()
+        of_row = {r: a for a in arrays for r in a.rows()}
+        files = "\n".join(f'      <File name={quoteattr(f)}/>' for f in source_files)
+
+        def unknowns(tag: str, items: Sequence[Unknown]) -> list[str]:
+            merged: dict[int, set[int]] = {}
+            for u in items:
+                a = of_row[u.vr]
+                merged.setdefault(a.vr, set()).update(of_row[d - 1].vr for d in u.dependencies)
+            return [f'    <{tag} valueReference="{vr}" dependencies="{" ".join(map(str, sorted(deps)))}"/>'
+                    for vr, deps in merged.items()]
+
+        indicators = [a for a in arrays if self.variables[a.first].kind == "indicator"]
+        structure = (unknowns("Output", self.outputs) + unknowns("ContinuousStateDerivative", self.derivatives)
+                     + unknowns("InitialUnknown", self.initial_unknowns)
+                     + [f'    <EventIndicator valueReference="{a.vr}"/>' for a in indicators])
+        values = {
+            "model_name": quoteattr(spec.model_name),
+            "model_identifier": quoteattr(spec.model_identifier),
+            "guid": quoteattr(guid),
+            "description": quoteattr(spec.description),
+            "generation_tool": quoteattr(f"manipulator-workbench {version}"),
+            "model_exchange": "" if spec.discrete is not None else (
+                f"  <ModelExchange\n    modelIdentifier={quoteattr(spec.model_identifier)}\n"
+                '    canGetAndSetFMUState="true"\n    canSerializeFMUState="true"\n'
+                '    providesDirectionalDerivatives="true"\n    providesAdjointDerivatives="true"/>\n'),
+            "unit_definitions": self._unit_definitions(),
+            "stop_time": _xml_number(spec.stop_time),
+            "step_size": _xml_number(spec.step),
+            "annotations": self._annotations_fmi3(),
+            "time_vr": str(FMI3_TIME_VR),
+            "model_variables": "\n".join(self._array_variable(a, of_row) for a in arrays),
+            "model_structure": "\n".join(structure),
+        }
+        return _template("modelDescription3.xml").substitute(values)
+
+    def _array_variable(self, a: ArrayVariable, of_row: dict[int, ArrayVariable]) -> str:
+        rows = [self.variables[r] for r in a.rows()]
+        v = rows[0]
+        units = [r.unit for r in rows]
+        one_unit = len(set(units)) == 1
+        # elements of different units (revolute and prismatic joints): no unit attribute, each element's in the text
+        descriptions = [r.description + ("" if one_unit or not r.unit else f" ({r.unit})") for r in rows]
+        if len(set(descriptions)) == 1:
+            text = descriptions[0]
+        else:
+            text = "; ".join(f"[{k + 1}] {d}" for k, d in enumerate(descriptions))
+        attrs = [f"name={quoteattr(a.name)}", f'valueReference="{a.vr}"']
+        if text:
+            attrs.append(f"description={quoteattr(text)}")
+        attrs += [f'causality="{v.causality}"', f'variability="{v.variability}"']
+        if v.initial is not None:
+            attrs.append(f'initial="{v.initial}"')
+        attrs += _value_attrs(v.unit if one_unit else "",
+                              None if v.derivative_of is None else of_row[v.derivative_of].vr,
+                              None if v.start is None else " ".join(_xml_number(r.start) for r in rows), v.min, v.max)
+        head = f"    <!-- vr {a.vr}: rows {a.first}..{a.first + a.count - 1} of the table -->\n"
+        if a.scalar:
+            return head + f"    <Float64 {' '.join(attrs)}/>"
+        return head + f"    <Float64 {' '.join(attrs)}>\n      <Dimension start=\"{a.count}\"/>\n    </Float64>"
+
     def model_description(self, guid: str, source_files: Sequence[str], version: str) -> str:
         """The text of ``modelDescription.xml``."""
         spec = self.spec
@@ -222,6 +381,11 @@ class VariableTable:
             "unit_definitions": self._unit_definitions(),
             "stop_time": _xml_number(spec.stop_time),
             "event_indicators": str(spec.modes.nz if spec.modes is not None else 0),
+            "model_exchange": "" if spec.discrete is not None else (
+                f"  <ModelExchange\n    modelIdentifier={quoteattr(spec.model_identifier)}\n"
+                '    canGetAndSetFMUstate="true"\n    canSerializeFMUstate="true"\n'
+                f'    providesDirectionalDerivative="true">\n    <SourceFiles>\n{files}\n    </SourceFiles>\n'
+                "  </ModelExchange>\n"),
             "step_size": _xml_number(spec.step),
             "vendor_annotations": self._vendor_annotations(),
             "model_variables": "\n".join(self._scalar_variable(v) for v in self.variables),
@@ -241,7 +405,9 @@ class VariableTable:
             model_identifier_string=_c_string(spec.model_identifier),
             nx=len(spec.states), nu=len(spec.inputs), np=len(spec.params), ny=len(spec.outputs),
             nz=spec.modes.nz if spec.modes is not None else 0,
+            nd=len(spec.discrete.states) if spec.discrete is not None else 0,
             nvars=len(self.variables),
+            narrays=len(self.arrays()),
             value_references=macros,
         )
 
@@ -249,7 +415,8 @@ class VariableTable:
         """The text of ``model_data.c``: the variable table and start values behind ``mw_model()``."""
         spec = self.spec
         kinds = {"state": "MW_KIND_STATE", "derivative": "MW_KIND_DERIVATIVE", "input": "MW_KIND_INPUT",
-                 "parameter": "MW_KIND_PARAMETER", "output": "MW_KIND_OUTPUT", "step": "MW_KIND_STEP"}
+                 "parameter": "MW_KIND_PARAMETER", "output": "MW_KIND_OUTPUT", "step": "MW_KIND_STEP",
+                 "indicator": "MW_KIND_INDICATOR", "discrete": "MW_KIND_DISCRETE"}
         settable = {"never": "MW_SET_NEVER", "initial": "MW_SET_INITIAL", "tunable": "MW_SET_TUNABLE",
                     "input": "MW_SET_INPUT", "state": "MW_SET_STATE"}
         rows = []
@@ -258,15 +425,20 @@ class VariableTable:
             hi = "HUGE_VAL" if v.max is None else _c_number(v.max)
             rows.append(f"    {{{_c_string(v.name)}, {kinds[v.kind]}, {settable[v.settable]}, {v.index}u, {lo}, {hi}}},")
         fid = spec.model_identifier
+        array_rows = [f"    {{{_c_string(a.name)}, {a.first}u, {a.count}u, {int(a.scalar)}u}}," for a in self.arrays()]
         return _template("model_data.c").substitute(
             casadi_header=casadi_header,
             variable_rows="\n".join(rows),
+            array_rows="\n".join(array_rows),
             x_start=_c_array(spec.x_start),
             x_nominal=_c_array(np.ones(len(spec.states))),
             u_start=_c_array(np.zeros(len(spec.inputs))),
             p_start=_c_array(spec.p_start),
             step_start=_c_number(spec.step),
             ode=f"{fid}_ode", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
+            ode_adj=f"{fid}_ode_adj", out_adj=f"{fid}_out_adj", tick=f"{fid}_tick",
+            d_start=_c_array(spec.discrete.start if spec.discrete is not None else np.zeros(0)),
+            sample_period=_c_number(spec.discrete.period if spec.discrete is not None else 0.0),
             events=f"{fid}_events", update=f"{fid}_update", start=f"{fid}_start",
         )
 
@@ -290,6 +462,15 @@ class VariableTable:
                 "    </Tool>\n"
                 "  </VendorAnnotations>\n")
 
+    def _annotations_fmi3(self) -> str:
+        if not self.spec.robot:
+            return ""
+        return ("  <Annotations>\n"
+                "    <Annotation type=\"manipulator-workbench\">\n"
+                f"      <Robot {self._robot_annotation_attrs()}/>\n"
+                "    </Annotation>\n"
+                "  </Annotations>\n")
+
     def _scalar_variable(self, v: Variable) -> str:
         attrs = [f"name={quoteattr(v.name)}", f'valueReference="{v.vr}"']
         if v.description:
@@ -297,17 +478,8 @@ class VariableTable:
         attrs += [f'causality="{v.causality}"', f'variability="{v.variability}"']
         if v.initial is not None:
             attrs.append(f'initial="{v.initial}"')
-        real = []
-        if v.unit:
-            real.append(f"unit={quoteattr(v.unit)}")
-        if v.derivative_of is not None:
-            real.append(f'derivative="{v.derivative_of + 1}"')
-        if v.start is not None:
-            real.append(f'start="{_xml_number(v.start)}"')
-        if v.min is not None:
-            real.append(f'min="{_xml_number(v.min)}"')
-        if v.max is not None:
-            real.append(f'max="{_xml_number(v.max)}"')
+        real = _value_attrs(v.unit, None if v.derivative_of is None else v.derivative_of + 1,
+                            None if v.start is None else _xml_number(v.start), v.min, v.max)
         return (f"    <!-- vr {v.vr}, index {v.xml_index} -->\n"
                 f"    <ScalarVariable {' '.join(attrs)}>\n"
                 f"      <Real {' '.join(real)}/>\n"
@@ -409,6 +581,18 @@ def build_table(spec: ModelSpec) -> VariableTable:
         description="step of the co-simulation integrator (classical RK4): a communication step h "
                     "takes ceil(h / internal_step) equal sub-steps (k if h / internal_step is within a "
                     f"relative {SUBSTEP_RTOL:g} of an integer k), at most {MAX_SUBSTEPS} per fmi2DoStep")
+
+    nz = spec.modes.nz if spec.modes is not None else 0
+    for i in range(nz):
+        add(name=f"friction_indicator[{i + 1}]", kind="indicator", index=i, causality="local",
+            variability="continuous", initial="calculated", start=None, unit="",
+            description=f"event indicator of joint {i + 1}'s friction mode: positive while the mode holds",
+            settable="never")
+
+    if spec.discrete is not None:
+        for i, q in enumerate(spec.discrete.states):
+            add(name=q.name, kind="discrete", index=i, causality="local", variability="discrete", initial="exact",
+                start=float(spec.discrete.start[i]), unit=q.unit, description=q.description, settable="initial")
 
     names = [v.name for v in variables]
     duplicates = sorted({n for n in names if names.count(n) > 1})
@@ -601,6 +785,21 @@ def _c_string(text: str) -> str:
 def _c_identifier(name: str) -> str:
     ident = re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_")
     return ident
+
+
+def _value_attrs(unit: str, derivative: int | None, start: str | None, lo: float | None, hi: float | None) -> list[str]:
+    """The value attributes of a variable: unit, derivative (an index in FMI 2.0, a value reference in 3.0),
+    start (one number, or an array's numbers), min and max."""
+    attrs = [f"unit={quoteattr(unit)}"] if unit else []
+    if derivative is not None:
+        attrs.append(f'derivative="{derivative}"')
+    if start is not None:
+        attrs.append(f'start="{start}"')
+    if lo is not None:
+        attrs.append(f'min="{_xml_number(lo)}"')
+    if hi is not None:
+        attrs.append(f'max="{_xml_number(hi)}"')
+    return attrs
 
 
 def _unknowns_xml(tag: str, unknowns: Sequence[Unknown]) -> str:

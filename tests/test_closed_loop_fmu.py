@@ -130,10 +130,84 @@ def test_controller_fmu_variables(robot, designs):
     assert np.all(unsaturated.p_start[12:16] == NO_LIMIT)
 
 
-def test_pid_has_a_state_and_is_refused(robot):
-    pid = design_robot(robot, "pid", analyse=False).controller(RATE)
-    with pytest.raises(ValueError, match=r"controller: expected a kind in .* got 'pid'"):
-        controller_spec(pid, robot)
+@pytest.fixture(scope="module")
+def pid_fmu(robot, tmp_path_factory):
+    design = design_robot(robot, "pid", analyse=False)
+    return design, export_controller_fmu(design, tmp_path_factory.mktemp("pid") / "pid.fmu", rate_hz=RATE)
+
+
+def test_pid_controller_fmu_integrator_is_a_sampled_state(robot, pid_fmu):
+    """The PID's integrator z[i] is a discrete state ticked once per period: the torques equal the Python
+    controller's over 300 random samples (the integrator carried from sample to sample) to 1e-12."""
+    design, path = pid_fmu
+    spec = controller_spec(design.controller(RATE), robot)
+    assert [q.name for q in spec.discrete.states] == [f"z[{i}]" for i in range(1, 5)]
+    assert spec.discrete.period == pytest.approx(1e-3) and "Ki[1]" in [q.name for q in spec.params]
+    report = validate_controller_fmu(path, design.controller(RATE), samples=300, seed=3)
+    assert report.problems(tol=1e-12) == [] and report.max_rel_diff <= 1e-12
+    assert 0.05 < report.saturated_fraction < 0.95                   # the anti-wind-up branch is exercised
+    assert controller_fmu_kind(path) == ("scara", "pid")
+
+
+def test_pid_controller_fmu_steps_ticks_and_state(pid_fmu):
+    """A step of two periods is two ticks with the inputs held; a step that is no whole number of periods,
+    Model Exchange, and a serialised state of the wrong size are refused; the FMU state carries z."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Model, FMU2Slave
+
+    _, path = pid_fmu
+    md = read_model_description(str(path))
+    assert md.modelExchange is None and md.coSimulation is not None
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzip = extract(str(path))
+    inputs = [vr[f"{g}[{i}]"] for g in ("q_ref", "qd_ref", "q", "qd") for i in range(1, 5)]
+    q_ref = np.array([0.1, 0.2, 0.05, 0.3])
+    u = list(np.concatenate([q_ref, np.zeros(4), q_ref - 1e-6 * np.arange(1, 5), np.zeros(4)]))  # unsaturated
+    z = [vr[f"z[{i}]"] for i in range(1, 5)]
+
+    def slave(name):
+        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=name)
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.setReal(inputs, u)
+        return s
+
+    a, b = slave("a"), slave("b")
+    a.doStep(0.0, 2e-3)
+    b.doStep(0.0, 1e-3)
+    b.doStep(1e-3, 1e-3)
+    za = np.array(a.getReal(z))
+    assert np.array_equal(za, np.array(b.getReal(z))) and np.all(za != 0)
+    state = a.getFMUstate()
+    blob = a.serializeFMUstate(state)
+    a.doStep(2e-3, 1e-3)
+    assert not np.array_equal(np.array(a.getReal(z)), za)
+    a.setFMUstate(a.deSerializeFMUstate(blob))
+    assert np.array_equal(np.array(a.getReal(z)), za)                # z is in the (serialised) FMU state
+    with pytest.raises(Exception):
+        a.deSerializeFMUstate(blob[:-8])
+    with pytest.raises(Exception):
+        b.doStep(2e-3, 1.5e-3)                                       # not a whole number of periods
+    for s in (a, b):
+        s.freeInstance()
+    me = FMU2Model(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                   instanceName="me")
+    with pytest.raises(Exception):
+        me.instantiate()
+
+
+def test_plant_fmu_with_pid_controller_fmu_matches_python_loop(robot, task, plant_fmu, pid_fmu):
+    """3 s of the pick-and-place: the plant FMU with the PID FMU against the Python loop with the PID."""
+    design, path = pid_fmu
+    ref = simulate_tracking(robot, design.controller(RATE), task, t_final=3.0)
+    res = run_closed_loop(plant_fmu, path, task, plant=robot, t_final=3.0)
+    assert res.controller == "pid"
+    assert_same_run(res, ref)
+    pd = simulate_tracking(robot, design_robot(robot, "pd", analyse=False).controller(RATE), task, t_final=3.0)
+    assert np.max(np.abs(pd.q - res.q)) > 1e3 * TOL_Q               # the integrator did act
 
 
 # ------------------------------------------------- (a) plant FMU + Python controller

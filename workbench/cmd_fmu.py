@@ -36,11 +36,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
     else:
         platforms = resolve_platforms(args.platforms, flag="--platforms")
     out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
-    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model, platforms=platforms,
-                      progress=_say)
+    path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model,
+                      fmi_version=args.fmi_version, platforms=platforms, progress=_say)
     if why:
         _say(f"--platforms: {why}")
-    print(f"wrote {path} ({', '.join(p.name for p in platforms)})")
+    print(f"wrote {path} (FMI {args.fmi_version}.0; {', '.join(p.name for p in platforms)})")
     return 0
 
 
@@ -54,7 +54,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``export-fmu`` and ``validate-fmu`` to the CLI's sub-command parsers."""
-    p = subparsers.add_parser("export-fmu", help="export a robot as an FMI 2.0 FMU (Model Exchange and Co-Simulation)")
+    p = subparsers.add_parser("export-fmu", help="export a robot as an FMI 2.0 or 3.0 FMU (Model Exchange and "
+                                                 "Co-Simulation)")
     p.add_argument("robot", help="built-in name or TOML file")
     p.add_argument("-o", "--output", required=True, metavar="FILE.fmu", help="the FMU to write")
     p.add_argument("--step", type=_internal_step, default=1e-3, metavar="H",
@@ -66,6 +67,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "universal binary), aarch64-linux, or FMI 3.0 names (x86_64-darwin, aarch64-darwin, ...); "
                         "host = this machine's. Default: all the toolchain can build (all five with the "
                         "[cross] extra); the host's is always built")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help="FMI version: 2 (scalar variables, binaries/linux64) or 3 (array variables q, qd, tau_m, "
+                        "adjoint derivatives, binaries/x86_64-linux); default 2")
     p.set_defaults(func=_cmd_export)
 
     p = subparsers.add_parser("validate-fmu", help="validate an FMU: description, binary, FMPy (CS and ME), "

@@ -59,7 +59,14 @@
 #define MODES_CancelStep MW_MODE_STEP_COMPLETE
 #define MODES_GetStatus (MW_MODE_STEP_COMPLETE | MW_MODE_STEP_FAILED | MW_MODE_TERMINATED)
 
-enum { FOR_ANY = 0, FOR_ME = 1, FOR_CS = 2 };
+#define FOR_ANY MW_FOR_ANY
+#define FOR_ME MW_FOR_ME
+#define FOR_CS MW_FOR_CS
+/* the shared argument checks of instance.c, with this version's status type */
+#define fail(inst, fn, what) ((fmi2Status)mw_fail(inst, fn, what))
+#define null_arg mw_null_arg
+#define wrong_size mw_wrong_size
+#define non_finite(inst, fn, what, v, n) ((fmi2Status)mw_non_finite(inst, fn, what, v, n))
 
 static const char *mode_name(unsigned int mode) {
     switch (mode) {
@@ -75,45 +82,9 @@ static const char *mode_name(unsigned int mode) {
     }
 }
 
-/* Log an error, enter the error mode, return fmi2Error. */
-static fmi2Status fail(MwInstance *inst, const char *fn, const char *what) {
-    mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: %s", fn, what);
-    inst->mode = MW_MODE_ERROR;
-    return fmi2Error;
-}
-
-/* The instance if the call is legal for its interface type and mode; else logs, returns NULL. */
-static MwInstance *enter(fmi2Component c, const char *fn, int interface_type, unsigned int modes) {
-    MwInstance *inst = (MwInstance *)c;
-    if (inst == NULL) return NULL;
-    mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s", fn);
-    if (interface_type == FOR_ME && inst->type != fmi2ModelExchange) {
-        fail(inst, fn, "this function belongs to Model Exchange, the instance is Co-Simulation");
-        return NULL;
-    }
-    if (interface_type == FOR_CS && inst->type != fmi2CoSimulation) {
-        fail(inst, fn, "this function belongs to Co-Simulation, the instance is Model Exchange");
-        return NULL;
-    }
-    if ((inst->mode & modes) == 0) {
-        mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: illegal call sequence, not allowed in mode \"%s\"", fn,
-               mode_name(inst->mode));
-        inst->mode = MW_MODE_ERROR;
-        return NULL;
-    }
-    return inst;
-}
-
 #define ENTER(fn, type, modes)                                 \
-    MwInstance *inst = enter(c, "fmi2" #fn, type, modes);      \
+    MwInstance *inst = mw_enter(c, "fmi2" #fn, type, modes, mode_name); \
     if (inst == NULL) return fmi2Error
-
-static int null_arg(MwInstance *inst, const char *fn, const char *name, const void *ptr) {
-    if (ptr != NULL) return 0;
-    mw_log(inst, fmi2Error, MW_LOG_ERROR, "%s: argument %s is NULL", fn, name);
-    inst->mode = MW_MODE_ERROR;
-    return 1;
-}
 
 static fmi2Status no_variables_of_type(MwInstance *inst, const char *fn, const char *type_name,
                                        const fmi2ValueReference vr[], size_t nvr, const void *values) {
@@ -134,25 +105,20 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[]) {
     ENTER(SetDebugLogging, FOR_ANY, MODES_SetDebugLogging);
     if (nCategories > 0 && null_arg(inst, "fmi2SetDebugLogging", "categories[]", categories)) return fmi2Error;
-    return mw_set_logging(inst, loggingOn, nCategories, categories);
+    return (fmi2Status)mw_set_logging(inst, "fmi2SetDebugLogging", loggingOn, nCategories, categories);
 }
 
-/* Times within a relative 1e-12 (absolute near 0) count as equal, as floating-point sums of steps differ. */
-static int is_close(double a, double b) {
-    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
-    return fabs(a - b) <= 1e-12 * (scale > 1.0 ? scale : 1.0);
-}
-
-/* Whether t is past the stopTime given to fmi2SetupExperiment (FMI 2.0, 2.1.6), rounding forgiven. */
-static int past_stop_time(const MwInstance *inst, double t) {
-    return inst->stop_time_defined && t > inst->stop_time && !is_close(t, inst->stop_time);
-}
-
-/* A non-finite computed value: logged, and the call returns fmi2Discard (the one policy). */
-static fmi2Status non_finite(MwInstance *inst, const char *fn, const char *what, const double *v, size_t n) {
-    if (mw_all_finite(v, n)) return fmi2OK;
-    mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: %s at t = %.17g are not all finite", fn, what, inst->time);
-    return fmi2Discard;
+/* The instance's log lines to the importer's fmi2CallbackLogger, whose message is a format string. */
+static void log_to_importer(const MwInstance *inst, MwStatus status, const char *category, const char *message) {
+    char escaped[2048];
+    size_t i, j;
+    fmi2CallbackLogger logger = (fmi2CallbackLogger)inst->host.logger;
+    for (i = 0, j = 0; message[i] != '\0' && j + 2 < sizeof(escaped); i++) {
+        if (message[i] == '%') escaped[j++] = '%'; /* protect every '%' */
+        escaped[j++] = message[i];
+    }
+    escaped[j] = '\0';
+    logger(inst->host.env, inst->name, (fmi2Status)status, category, escaped);
 }
 
 static void log_before_instance(const fmi2CallbackFunctions *functions, fmi2String name, const char *message) {
@@ -165,6 +131,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     const MwModel *model = mw_model();
     MwInstance *inst;
+    MwHost host;
     (void)fmuResourceLocation; /* the model needs no resources */
     (void)visible;
 
@@ -186,12 +153,24 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         log_before_instance(functions, instanceName, "fmi2Instantiate: fmuType is neither fmi2ModelExchange nor fmi2CoSimulation");
         return NULL;
     }
+    if (fmuType == fmi2ModelExchange && model->nd > 0) {
+        log_before_instance(functions, instanceName,
+                            "fmi2Instantiate: this model has sampled discrete states (a digital controller): it is "
+                            "Co-Simulation only, the modelDescription.xml has no ModelExchange");
+        return NULL;
+    }
     if (fmuGUID == NULL || strcmp(fmuGUID, model->guid) != 0) {
         log_before_instance(functions, instanceName,
                             "fmi2Instantiate: wrong GUID: it does not match the modelDescription.xml of this binary");
         return NULL;
     }
-    inst = mw_instance_new(model, fmuType, instanceName, functions, loggingOn);
+    host.alloc = functions->allocateMemory;
+    host.release = functions->freeMemory;
+    host.log = log_to_importer;
+    host.env = functions->componentEnvironment;
+    host.logger = (MwAnyFunction)functions->logger;
+    inst = mw_instance_new(model, fmuType == fmi2ModelExchange ? MW_MODEL_EXCHANGE : MW_CO_SIMULATION, instanceName,
+                           &host, loggingOn);
     if (inst == NULL) {
         log_before_instance(functions, instanceName, "fmi2Instantiate: out of memory");
         return NULL;
@@ -202,7 +181,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 void fmi2FreeInstance(fmi2Component c) {
     MwInstance *inst = (MwInstance *)c;
     if (inst == NULL) return;
-    mw_log(inst, fmi2OK, MW_LOG_CALLS, "fmi2FreeInstance");
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "fmi2FreeInstance");
     mw_instance_free(inst);
 }
 
@@ -228,17 +207,10 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    int modes;
+    const char *problem;
     ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
-    mw_invalidate(inst);
-    modes = mw_start_modes(inst);
-    if (modes != 0)
-        return fail(inst, "fmi2ExitInitializationMode", modes == -1 ? "the model failed to compute the friction modes"
-                                                                    : "the initial friction modes did not settle");
-    if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
-        return fail(inst, "fmi2ExitInitializationMode", "the initial state and parameters give non-finite derivatives");
-    inst->mode = inst->type == fmi2ModelExchange ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
-    return fmi2OK;
+    problem = mw_exit_initialization(inst);
+    return problem == NULL ? fmi2OK : fail(inst, "fmi2ExitInitializationMode", problem);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
@@ -268,31 +240,16 @@ static const MwVariable *lookup(MwInstance *inst, const char *fn, fmi2ValueRefer
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     size_t i;
-    int need_xdot = 0, need_y = 0;
     ENTER(GetReal, FOR_ANY, MODES_GetValue);
     if (nvr == 0) return fmi2OK;
     if (null_arg(inst, "fmi2GetReal", "vr[]", vr) || null_arg(inst, "fmi2GetReal", "value[]", value)) return fmi2Error;
     for (i = 0; i < nvr; i++) {
-        const MwVariable *v = lookup(inst, "fmi2GetReal", vr[i]);
-        if (v == NULL) return fmi2Error;
-        need_xdot |= v->kind == MW_KIND_DERIVATIVE;
-        need_y |= v->kind == MW_KIND_OUTPUT;
+        if (lookup(inst, "fmi2GetReal", vr[i]) == NULL) return fmi2Error;
     }
-    if (need_xdot && mw_update_derivatives(inst) != 0)
-        return fail(inst, "fmi2GetReal", "the model failed to evaluate the derivatives");
-    if (need_y && mw_update_outputs(inst) != 0)
-        return fail(inst, "fmi2GetReal", "the model failed to evaluate the outputs");
     for (i = 0; i < nvr; i++) {
         const MwVariable *v = &inst->model->variables[vr[i]];
-        switch ((MwKind)v->kind) {
-        case MW_KIND_STATE: value[i] = inst->x[v->index]; break;
-        case MW_KIND_DERIVATIVE: value[i] = inst->xdot[v->index]; break;
-        case MW_KIND_INPUT: value[i] = inst->u[v->index]; break;
-        case MW_KIND_PARAMETER: value[i] = inst->p[v->index]; break;
-        case MW_KIND_OUTPUT: value[i] = inst->y[v->index]; break;
-        case MW_KIND_STEP: value[i] = inst->h_int; break;
-        default: return fail(inst, "fmi2GetReal", "corrupt variable table");
-        }
+        if (mw_prepare(inst, v) != 0) return fail(inst, "fmi2GetReal", "the model failed to evaluate");
+        value[i] = mw_value(inst, v);
     }
     return non_finite(inst, "fmi2GetReal", "the values", value, nvr);
 }
@@ -353,16 +310,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         }
     }
     for (i = 0; i < nvr; i++) {
-        const MwVariable *v = &inst->model->variables[vr[i]];
-        switch ((MwKind)v->kind) {
-        case MW_KIND_STATE: inst->x[v->index] = value[i]; break;
-        case MW_KIND_INPUT: inst->u[v->index] = value[i]; break;
-        case MW_KIND_PARAMETER: inst->p[v->index] = value[i]; break;
-        case MW_KIND_STEP: inst->h_int = value[i]; break;
-        default: return fail(inst, "fmi2SetReal", "corrupt variable table");
-        }
+        if (mw_assign(inst, &inst->model->variables[vr[i]], value[i]) != 0)
+            return fail(inst, "fmi2SetReal", "corrupt variable table");
     }
-    mw_invalidate(inst);
     return fmi2OK;
 }
 
@@ -398,90 +348,44 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* ---------------------------------------------------------------- FMU state */
 
+/* The FMU-state calls: instance.c does the work, a problem is an error with its message. */
+static fmi2Status state_call(MwInstance *inst, const char *fn, const char *problem) {
+    return problem == NULL ? fmi2OK : fail(inst, fn, problem);
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    MwSnapshot *snap;
     ENTER(GetFMUstate, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2GetFMUstate", "FMUstate", FMUstate)) return fmi2Error;
-    if (*FMUstate == NULL) {
-        snap = mw_snapshot_new(inst);
-        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "out of memory");
-        *FMUstate = (fmi2FMUstate)snap;
-    } else {
-        snap = mw_snapshot_find(inst, *FMUstate);
-        if (snap == NULL) return fail(inst, "fmi2GetFMUstate", "*FMUstate is not an FMU state of this instance");
-    }
-    mw_snapshot_take(inst, snap);
-    return fmi2OK;
+    return state_call(inst, "fmi2GetFMUstate", mw_state_get(inst, (void **)FMUstate));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    const MwSnapshot *snap;
     ENTER(SetFMUstate, FOR_ANY, MODES_FMUstate);
-    snap = mw_snapshot_find(inst, FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2SetFMUstate", "FMUstate is NULL or not an FMU state of this instance");
-    if (!mw_mode_valid(inst, snap->mode))
-        return fail(inst, "fmi2SetFMUstate", "the FMU state was taken by an instance of the other interface type");
-    mw_snapshot_restore(inst, snap);
-    return fmi2OK;
+    return state_call(inst, "fmi2SetFMUstate", mw_state_set(inst, FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    MwSnapshot *snap;
     ENTER(FreeFMUstate, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2FreeFMUstate", "FMUstate", FMUstate)) return fmi2Error;
-    if (*FMUstate == NULL) return fmi2OK;
-    snap = mw_snapshot_find(inst, *FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2FreeFMUstate", "*FMUstate is not an FMU state of this instance");
-    mw_snapshot_free(inst, snap);
-    *FMUstate = NULL;
-    return fmi2OK;
+    return state_call(inst, "fmi2FreeFMUstate", mw_state_free(inst, (void **)FMUstate));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
     ENTER(SerializedFMUstateSize, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2SerializedFMUstateSize", "size", size)) return fmi2Error;
-    if (mw_snapshot_find(inst, FMUstate) == NULL)
-        return fail(inst, "fmi2SerializedFMUstateSize", "FMUstate is NULL or not an FMU state of this instance");
-    *size = mw_serialized_size(inst->model);
-    return fmi2OK;
+    return state_call(inst, "fmi2SerializedFMUstateSize", mw_state_size(inst, FMUstate, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    const MwSnapshot *snap;
-    char what[128];
+    char what[160];
     ENTER(SerializeFMUstate, FOR_ANY, MODES_FMUstate);
-    snap = mw_snapshot_find(inst, FMUstate);
-    if (snap == NULL) return fail(inst, "fmi2SerializeFMUstate", "FMUstate is NULL or not an FMU state of this instance");
-    if (null_arg(inst, "fmi2SerializeFMUstate", "serializedState[]", serializedState)) return fmi2Error;
-    if (size != mw_serialized_size(inst->model)) {
-        snprintf(what, sizeof(what), "size %lu differs from fmi2SerializedFMUstateSize, %lu bytes",
-                 (unsigned long)size, (unsigned long)mw_serialized_size(inst->model));
-        return fail(inst, "fmi2SerializeFMUstate", what);
-    }
-    mw_serialize(inst->model, snap, serializedState);
-    return fmi2OK;
+    return state_call(inst, "fmi2SerializeFMUstate",
+                      mw_state_serialize(inst, FMUstate, (unsigned char *)serializedState, size, "fmi2SerializedFMUstateSize", what,
+                                         sizeof(what)));
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate *FMUstate) {
-    MwSnapshot *snap;
-    const char *problem;
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size, fmi2FMUstate *FMUstate) {
     char what[192];
     ENTER(DeSerializeFMUstate, FOR_ANY, MODES_FMUstate);
-    if (null_arg(inst, "fmi2DeSerializeFMUstate", "serializedState[]", serializedState) ||
-        null_arg(inst, "fmi2DeSerializeFMUstate", "FMUstate", FMUstate))
-        return fmi2Error;
-    /* *FMUstate is an output: its incoming value is not read; a new FMU state is always allocated */
-    snap = mw_snapshot_new(inst);
-    if (snap == NULL) return fail(inst, "fmi2DeSerializeFMUstate", "out of memory");
-    problem = mw_deserialize(inst, serializedState, size, snap);
-    if (problem != NULL) {
-        mw_snapshot_free(inst, snap);
-        snprintf(what, sizeof(what), "%lu bytes rejected: %s", (unsigned long)size, problem);
-        return fail(inst, "fmi2DeSerializeFMUstate", what);
-    }
-    *FMUstate = (fmi2FMUstate)snap;
-    return fmi2OK;
+    return state_call(inst, "fmi2DeSerializeFMUstate", mw_state_deserialize(inst, (const unsigned char *)serializedState, size,
+                                                                     (void **)FMUstate, what, sizeof(what)));
 }
 
 /* ----------------------------------------------------- directional derivatives */
@@ -502,9 +406,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     if (nKnown > 0 && (null_arg(inst, fn, "vKnown_ref[]", vKnown_ref) || null_arg(inst, fn, "dvKnown[]", dvKnown)))
         return fmi2Error;
 
-    if (m->nx > 0) memset(inst->dx, 0, m->nx * sizeof(double));
-    if (m->nu > 0) memset(inst->du, 0, m->nu * sizeof(double));
-    if (m->np > 0) memset(inst->dp, 0, m->np * sizeof(double));
+    mw_clear_seeds(inst);
     for (i = 0; i < nKnown; i++) {
         const MwVariable *v = lookup(inst, fn, vKnown_ref[i]);
         if (v == NULL) return fmi2Error;
@@ -512,11 +414,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             snprintf(what, sizeof(what), "the seed of %.60s is not finite", v->name);
             return fail(inst, fn, what);
         }
-        switch ((MwKind)v->kind) {
-        case MW_KIND_STATE: inst->dx[v->index] += dvKnown[i]; break;
-        case MW_KIND_INPUT: inst->du[v->index] += dvKnown[i]; break;
-        case MW_KIND_PARAMETER: inst->dp[v->index] += dvKnown[i]; break;
-        default:
+        if (mw_seed(inst, v, dvKnown[i], 0) != 0) {
             snprintf(what, sizeof(what), "%.60s cannot be a known: knowns are states, inputs and parameters", v->name);
             return fail(inst, fn, what);
         }
@@ -534,16 +432,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         }
     }
     if (mw_directional(inst, need_dxdot, need_dy) != 0) return fail(inst, fn, "the model failed to evaluate");
-    for (i = 0; i < nUnknown; i++) {
-        const MwVariable *v = &m->variables[vUnknown_ref[i]];
-        if (v->kind == MW_KIND_DERIVATIVE) {
-            dvUnknown[i] = inst->dxdot[v->index];
-        } else if (v->kind == MW_KIND_OUTPUT) {
-            dvUnknown[i] = inst->dy[v->index];
-        } else {
-            dvUnknown[i] = inst->dx[v->index];
-        }
-    }
+    for (i = 0; i < nUnknown; i++) dvUnknown[i] = mw_sensitivity(inst, &m->variables[vUnknown_ref[i]], 0);
     return non_finite(inst, fn, "the directional derivatives", dvUnknown, nUnknown);
 }
 
@@ -556,14 +445,12 @@ fmi2Status fmi2EnterEventMode(fmi2Component c) {
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
-    int changed, x_changed, status;
+    int x_changed;
+    const char *problem;
     ENTER(NewDiscreteStates, FOR_ME, MODES_NewDiscreteStates);
     if (null_arg(inst, "fmi2NewDiscreteStates", "eventInfo", eventInfo)) return fmi2Error;
-    /* the friction modes follow the state, inputs and parameters: a joint sticks or breaks loose */
-    status = mw_settle_modes(inst, &changed, &x_changed);
-    if (status != 0)
-        return fail(inst, "fmi2NewDiscreteStates", status == -1 ? "the model failed to update the friction modes"
-                                                                 : "the friction modes did not settle");
+    problem = mw_event_update(inst, &x_changed);
+    if (problem != NULL) return fail(inst, "fmi2NewDiscreteStates", problem);
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
@@ -584,7 +471,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
     char what[192];
     ENTER(CompletedIntegratorStep, FOR_ME, MODES_CompletedIntegratorStep);
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (past_stop_time(inst, inst->time)) {
+    if (mw_past_stop_time(inst, inst->time)) {
         snprintf(what, sizeof(what), "an integrator step completed at t = %.17g, past the stopTime %.17g of "
                  "fmi2SetupExperiment", inst->time, inst->stop_time);
         return fail(inst, "fmi2CompletedIntegratorStep", what);
@@ -598,33 +485,11 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    const char *problem;
     char what[192];
     ENTER(SetTime, FOR_ME, MODES_SetTime);
-    if (!isfinite(time)) return fail(inst, "fmi2SetTime", "time is not finite");
-    /* Past stopTime: an error in event mode. In continuous-time mode an integrator may try points past
-       it inside a step that it then interpolates back (CVode does); the step is refused only if it is
-       accepted there (fmi2CompletedIntegratorStep). */
-    if (inst->mode == MW_MODE_EVENT && past_stop_time(inst, time)) {
-        snprintf(what, sizeof(what), "time %.17g is past the stopTime %.17g of fmi2SetupExperiment", time,
-                 inst->stop_time);
-        return fail(inst, "fmi2SetTime", what);
-    }
-    /* in event mode time stands still or moves on to the event; it never goes back */
-    if (inst->mode == MW_MODE_EVENT && time < inst->time && !is_close(time, inst->time)) {
-        snprintf(what, sizeof(what), "time %.17g is before the current time %.17g: in event mode time may not go back",
-                 time, inst->time);
-        return fail(inst, "fmi2SetTime", what);
-    }
-    inst->time = time;
-    return fmi2OK;
-}
-
-static int wrong_size(MwInstance *inst, const char *fn, const char *name, size_t got, size_t expected) {
-    char what[128];
-    if (got == expected) return 0;
-    snprintf(what, sizeof(what), "%s is %lu, the model has %lu", name, (unsigned long)got, (unsigned long)expected);
-    fail(inst, fn, what);
-    return 1;
+    problem = mw_set_time(inst, time, what, sizeof(what));
+    return problem == NULL ? fmi2OK : fail(inst, "fmi2SetTime", problem);
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
@@ -709,37 +574,15 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     const char *fn = "fmi2DoStep";
     fmi2Status status;
     char what[256];
-    double tol, next;
-    unsigned long long n;
+    const char *problem;
+    unsigned long long ticks = 1, n = 1;
     ENTER(DoStep, FOR_CS, MODES_DoStep);
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
-    if (!isfinite(currentCommunicationPoint)) return fail(inst, fn, "currentCommunicationPoint is not finite");
-    if (!(communicationStepSize > 0.0) || !isfinite(communicationStepSize)) {
-        snprintf(what, sizeof(what), "communicationStepSize %g must be positive and finite", communicationStepSize);
-        return fail(inst, fn, what);
-    }
-    tol = 1e-9 * (fabs(inst->time) > 1.0 ? fabs(inst->time) : 1.0);
-    if (fabs(currentCommunicationPoint - inst->time) > tol) {
-        snprintf(what, sizeof(what), "currentCommunicationPoint %.17g differs from the FMU time %.17g",
-                 currentCommunicationPoint, inst->time);
-        return fail(inst, fn, what);
-    }
-    next = currentCommunicationPoint + communicationStepSize;
-    if (past_stop_time(inst, next)) {
-        snprintf(what, sizeof(what), "a step from %.17g of %.17g s ends past the stopTime %.17g of fmi2SetupExperiment",
-                 currentCommunicationPoint, communicationStepSize, inst->stop_time);
-        return fail(inst, fn, what);
-    }
-    n = mw_substeps(communicationStepSize, inst->h_int);
-    if (n == 0) {
-        snprintf(what, sizeof(what), "communicationStepSize %g needs more than %llu sub-steps of internal_step %g s, "
-                 "the most one call takes: use shorter communication steps or a longer internal_step",
-                 communicationStepSize, MW_MAX_SUBSTEPS, inst->h_int);
-        return fail(inst, fn, what);
-    }
-    mw_log(inst, fmi2OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s", fn,
-           currentCommunicationPoint, n, communicationStepSize / (double)n);
-    status = mw_do_step(inst, currentCommunicationPoint, communicationStepSize, n);
+    problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
+    if (problem != NULL) return fail(inst, fn, problem);
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s (%llu sample periods)", fn,
+           currentCommunicationPoint, ticks * n, communicationStepSize / (double)(ticks * n), ticks);
+    status = (fmi2Status)mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
     if (status == fmi2Discard) {
         inst->mode = MW_MODE_STEP_FAILED;
     } else if (status == fmi2Error) {
@@ -754,7 +597,7 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 }
 
 static fmi2Status status_unavailable(MwInstance *inst, const char *fn, int kind) {
-    mw_log(inst, fmi2Discard, MW_LOG_DISCARD, "%s: status kind %d is not available from this FMU", fn, kind);
+    mw_log(inst, MW_DISCARD, MW_LOG_DISCARD, "%s: status kind %d is not available from this FMU", fn, kind);
     return fmi2Discard;
 }
 

@@ -1,19 +1,25 @@
 /*
- * The narrow contract between the FMI 2.0 wrapper (written once, fmi2_functions.c
- * and instance.c) and one exported model (generated per robot: model_data.c and
+ * The narrow contract between the FMI wrappers (written once: instance.c, with
+ * fmi2_functions.c for FMI 2.0 and fmi3_functions.c for FMI 3.0) and one exported model (generated per robot: model_data.c and
  * the CasADi code it points to).
  *
  * A model is a continuous-time system with nz discrete modes m (the friction
- * mode of each joint; nz may be 0)
- *     xdot = ode(x, u, p, m),   y = out(x, u, p, m),   z = events(x, u, p, m)
+ * mode of each joint; nz may be 0) and nd sampled discrete states d (a digital
+ * controller's integrator; nd may be 0)
+ *     xdot = ode(x, u, p, m, d),   y = out(x, u, p, m, d),   z = events(x, u, p, m)
  * with nx states, nu inputs, np parameters and ny outputs, plus the forward
- * directional derivatives of ode and out (m held). The nz event indicators z
+ * directional derivatives of ode and out and their reverse-mode (adjoint)
+ * products (m held). The nz event indicators z
  * are positive while the modes are valid. At an event, update(x, u, p, m)
  * gives the next modes and states (one pass; the wrapper repeats it until
- * nothing changes); start(x, u, p) gives the modes to begin from. Every FMI
+ * nothing changes); start(x, u, p) gives the modes to begin from. The sampled
+ * states change once per sample_period only, at the start of each period:
+ * d <- tick(x, u, p, d) with the inputs held over the period (zero-order hold);
+ * they are never iterated. Every FMI
  * variable is one row of a table indexed by its value reference; a row says
- * which vector the variable lives in (kind) and where (index). The wrapper
- * never knows what the model is.
+ * which vector the variable lives in (kind) and where (index). FMI 3.0 groups
+ * consecutive rows into array variables (arrays[], one value reference each);
+ * FMI 2.0 exposes the rows themselves. The wrapper never knows what the model is.
  */
 #ifndef MW_MODEL_H
 #define MW_MODEL_H
@@ -60,7 +66,9 @@ typedef enum {
     MW_KIND_INPUT = 2,      /* u[index] */
     MW_KIND_PARAMETER = 3,  /* p[index] */
     MW_KIND_OUTPUT = 4,     /* y[index] = out(x, u, p)[index] */
-    MW_KIND_STEP = 5        /* the co-simulation internal step, a fixed parameter */
+    MW_KIND_STEP = 5,       /* the co-simulation internal step, a fixed parameter */
+    MW_KIND_INDICATOR = 6,  /* z[index] = events(x, u, p, m)[index], an event indicator */
+    MW_KIND_DISCRETE = 7    /* d[index], a sampled discrete state */
 } MwKind;
 
 /* When a variable may be set (FMI 2.0 causality/variability/initial). */
@@ -82,6 +90,14 @@ typedef struct {
     double max;
 } MwVariable;
 
+/* An FMI 3.0 variable: rows first .. first + count - 1 of the table (count 1: a scalar). */
+typedef struct {
+    const char *name;
+    unsigned int first;
+    unsigned int count;
+    unsigned int scalar; /* 1: no <Dimension>, a scalar variable */
+} MwArray;
+
 typedef struct {
     const char *model_identifier;
     const char *guid;
@@ -89,15 +105,23 @@ typedef struct {
     size_t nz;                    /* discrete modes = event indicators */
     size_t nvars;                 /* rows of variables[], value references 0..nvars-1 */
     const MwVariable *variables;
+    size_t narrays;               /* FMI 3.0 variables, value references 0..narrays-1 */
+    const MwArray *arrays;
     const double *x_start;        /* nx */
     const double *x_nominal;      /* nx */
     const double *u_start;        /* nu */
     const double *p_start;        /* np */
     double step_start;            /* default internal step of the co-simulation integrator */
-    MwFunction ode;               /* (x, u, p, m) -> xdot */
-    MwFunction out;               /* (x, u, p, m) -> y */
-    MwFunction ode_dir;           /* (x, u, p, m, dx, du, dp) -> dxdot, forward mode */
-    MwFunction out_dir;           /* (x, u, p, m, dx, du, dp) -> dy, forward mode */
+    size_t nd;                    /* sampled discrete states d (0: none) */
+    double sample_period;         /* s: tick runs once per period; 0 when nd = 0 */
+    const double *d_start;        /* nd */
+    MwFunction ode;               /* (x, u, p, m, d) -> xdot */
+    MwFunction out;               /* (x, u, p, m, d) -> y */
+    MwFunction ode_dir;           /* (x, u, p, m, d, dx, du, dp) -> dxdot, forward mode (d held) */
+    MwFunction out_dir;           /* (x, u, p, m, d, dx, du, dp) -> dy, forward mode (d held) */
+    MwFunction ode_adj;           /* (x, u, p, m, d, wxdot) -> [ax; au; ap] = J_ode^T wxdot, reverse mode */
+    MwFunction out_adj;           /* (x, u, p, m, d, wy) -> [ax; au; ap] = J_out^T wy, reverse mode */
+    MwFunction tick;              /* (x, u, p, d) -> d_next, once per sample period */
     MwFunction events;            /* (x, u, p, m) -> z, nz indicators, > 0 while the modes hold */
     MwFunction update;            /* (x, u, p, m) -> (m_next, x_next): one pass of the mode update */
     MwFunction start;             /* (x, u, p) -> m: the modes to begin from */

@@ -10,7 +10,9 @@
 #define MW_NP $np
 #define MW_NY $ny
 #define MW_NZ $nz
+#define MW_ND $nd
 #define MW_NVARS $nvars
+#define MW_NARRAYS $narrays
 
 /* value references */
 $value_references
