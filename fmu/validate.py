@@ -199,16 +199,20 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
     problems: list[str] = []
     facts: dict[str, Any] = {}
     from .binaries import carried_platforms
-    from .platforms import host_platform
+    from .platforms import host_platform, platform_folder
+    from .simulate import fmi_version
 
+    version = fmi_version(fmu_path)
+    prefix = f"fmi{version}"
     host = host_platform()
-    carried = carried_platforms(fmu_path)
+    carried = carried_platforms(fmu_path, version)
     facts["platforms"] = list(carried)
     with tempfile.TemporaryDirectory(prefix="mw_fmu_check_") as tmp, zipfile.ZipFile(fmu_path) as zf:
-        problems += _other_platforms(zf, carried, host.name, Path(tmp), facts)
+        problems += _other_platforms(zf, carried, host.name, Path(tmp), facts, prefix)
         binaries = [carried[host.name]] if host.name in carried else []
         if not binaries:
-            return problems + [f"{fmu_path}: no binaries/{host.fmi2_folder}/*{host.suffix} (this machine's) in the FMU"], facts
+            folder = platform_folder(host.name, version)
+            return problems + [f"{fmu_path}: no binaries/{folder}/*{host.suffix} (this machine's) in the FMU"], facts
         lib = Path(zf.extract(binaries[0], tmp))
         tools = [t for t in ("nm", "readelf") if shutil.which(t) is None]
         if tools:
@@ -218,9 +222,6 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
             reason = " ".join(nm.stderr.split())[:200]
             return [f"{binaries[0]} is not a shared object nm can read ({reason})"], facts
         exports = sorted(line.split()[-1] for line in nm.stdout.splitlines() if line.strip())
-        from .simulate import fmi_version
-
-        prefix = f"fmi{fmi_version(fmu_path)}"
         others = [s for s in exports if not s.startswith(prefix)]
         if others:
             problems.append(f"{binaries[0]} exports non-FMI symbols: {others}")
@@ -235,7 +236,7 @@ def binary_problems(fmu_path: str | os.PathLike[str]) -> tuple[list[str], dict[s
 
 
 def _other_platforms(zf: zipfile.ZipFile, carried: dict[str, str], host: str, tmp: Path,
-                     facts: dict[str, Any]) -> list[str]:
+                     facts: dict[str, Any], prefix: str) -> list[str]:
     """Structural checks (llvm-objdump) of the binaries this machine does not load; problems named by member."""
     from .binaries import check_binary, objdump
     from .platforms import PLATFORMS
@@ -247,7 +248,7 @@ def _other_platforms(zf: zipfile.ZipFile, carried: dict[str, str], host: str, tm
         return []
     problems = []
     for target in others:
-        found = check_binary(zf.extract(carried[target.name], tmp / target.name), target, tool)
+        found = check_binary(zf.extract(carried[target.name], tmp / target.name), target, tool, prefix=prefix)
         problems += [f"{carried[target.name]} ({target.name}): {p}" for p in found.problems]
     facts["structure"] = f"checked with llvm-objdump: {', '.join(p.name for p in others)}"
     return problems

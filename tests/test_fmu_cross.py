@@ -316,3 +316,22 @@ def test_the_validation_report_prints_the_platforms(cross_export):
     assert ("  platforms: x86_64-linux, x86_64-windows, x86_64-darwin, aarch64-darwin, aarch64-linux (this machine's "
             "loaded and run; others checked with llvm-objdump: x86_64-windows, x86_64-darwin, aarch64-darwin, "
             "aarch64-linux)") in text
+
+
+def test_an_fmi3_fmu_carries_every_platform_in_its_own_folders(tmp_path):
+    """FMI 3.0 puts each binary in its platform tuple's folder; each exports only ``fmi3`` functions."""
+    from fmu.build import export_fmu
+    from fmu.validate import binary_problems
+
+    path = export_fmu("scara", tmp_path / "scara3.fmu", fmi_version=3, platforms=PLATFORMS)
+    carried = carried_platforms(path, 3)
+    assert set(carried) == set(BY_NAME)
+    assert all(member.startswith(f"binaries/{name}/") for name, member in carried.items())  # FMI 3.0 names
+    problems, facts = binary_problems(path)
+    assert problems == [] and facts["platforms"] == list(carried)
+    tool = objdump()
+    with zipfile.ZipFile(path) as zf:
+        win = Path(zf.extract(carried["x86_64-windows"], tmp_path))
+    assert check_binary(win, BY_NAME["x86_64-windows"], tool, prefix="fmi3").problems == []
+    wrong = check_binary(win, BY_NAME["x86_64-windows"], tool, prefix="fmi2").problems  # negative control
+    assert wrong and "fmi3DoStep" in " ".join(wrong)
