@@ -63,7 +63,7 @@ def torque_plot(result: TrackingResult, title: str = "", limit_sources: Sequence
         if result.tau_m_max is not None:
             limit = result.tau_m_max[j]
             source = f" ({limit_sources[j]})" if limit_sources is not None else ""
-            ax.axhline(limit, color="r", ls="--", lw=0.8, label=f"limit +-{limit:.4g} N m{source}")
+            ax.axhline(limit, color="r", ls="--", lw=0.8, label=f"limit ±{limit:.4g} N m{source}")
             ax.axhline(-limit, color="r", ls="--", lw=0.8)
             if met.saturated_fraction[j] > 0:
                 at_limit = np.abs(result.tau_m[:, j]) >= limit * (1 - 1e-12)

@@ -13,9 +13,11 @@ pytestmark = pytest.mark.filterwarnings("ignore::model.description.InertiaConsis
 def test_robots_lists_every_builtin(capsys):
     assert main(["robots"]) == 0
     out = capsys.readouterr().out
-    listed = [line.split()[0] for line in out.splitlines() if line.strip()]
+    lines = out.splitlines()
+    assert lines[0].split()[:3] == ["robot", "joints", "types"]
+    listed = [line.split()[0] for line in lines[1:] if line.strip()]
     assert listed == list(BUILTIN_ROBOTS)
-    assert "scara      4 joints (RRPR  )" in out
+    assert lines[1].split()[:4] == ["scara", "4", "RRPR", "SCARA"]
 
 
 def test_info_scara_prints_the_dh_table_with_units_and_the_motor_data(capsys):
