@@ -99,7 +99,7 @@ def test_report_html_has_none_of_the_reported_defects(demo):
         assert path not in (demo / "report.md").read_text()
         assert path not in (demo / "fmu_validation.txt").read_text()
     assert parsed.images and all(not Path(src).is_absolute() and (demo / src).is_file() for src in parsed.images)
-    assert "white-space:pre-wrap" in page  # long lines of the FMU log wrap instead of being clipped
+    assert "pre.wrap{white-space:pre-wrap" in page and '<pre class="wrap">FMU scara.fmu' in page  # the log wraps
     assert "<table>" in page and '<td class="num">' in page and '<td class="text">' in page
     empty = [p for p in demo.rglob("*") if p.is_dir() and not any(p.iterdir())]
     assert empty == [], f"empty folders left: {empty}"
@@ -114,3 +114,20 @@ def test_report_tables_give_each_number_column_one_format(demo):
     for col in (2, 3):
         cells = [r[col].strip() for r in rows]
         assert all("e" in c for c in cells) or not any("e" in c for c in cells), cells
+
+
+def test_inline_code_tables_and_details_render_in_both_formats():
+    """The Report blocks on their own (no demo): backticks become <code>, text is escaped, columns align."""
+    from workbench.report import Report, inline_html
+
+    assert inline_html("run `manip info <robot>` & see") == "run <code>manip info &lt;robot&gt;</code> &amp; see"
+    assert inline_html("no code") == "no code" and inline_html("`a` and `b`") == "<code>a</code> and <code>b</code>"
+    rep = Report("t")
+    rep.text("see `x`")
+    rep.table(["joint", "error"], [["shoulder", 1.5e-4], ["elbow", 0.0031]])
+    rep.details("log", "a very long line " * 40)
+    page, md = rep.to_html(), rep.to_markdown()
+    assert "<p>see <code>x</code></p>" in page and "see `x`" in md  # Markdown keeps the backticks
+    assert '<td class="text">shoulder</td><td class="num">1.500e-04</td>' in page
+    assert "|:---|---:|" in md  # text column left, number column right
+    assert '<details><summary>log</summary><pre class="wrap">' in page

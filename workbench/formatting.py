@@ -205,8 +205,13 @@ def saturation_rows(metrics: TrackingMetrics, limits: TorqueLimits) -> list[list
 
 
 def saturation_warnings(metrics: TrackingMetrics, limits: TorqueLimits) -> list[str]:
-    """One sentence per motor that reached its torque limit (none: an empty list)."""
+    """One sentence per motor that reached its torque limit, or went past it unclipped (none: an empty list)."""
     lines = []
+    over = np.flatnonzero((metrics.saturated_fraction == 0) & (metrics.peak_motor_torque > limits.tau_m_max))
+    for j in over:  # a run without clipping (manip track --no-saturation) that asks more than the motor gives
+        lines.append(f"motor {j + 1} ({metrics.joints[j]}) peaks at {metrics.peak_motor_torque[j]:.4g} N m, above its "
+                     f"torque limit {limits.tau_m_max[j]:.4g} N m (not clipped); limit from the "
+                     f"{limits.provenance(j, detail=True)}")
     for j in metrics.saturated:
         lines.append(f"motor {j + 1} ({metrics.joints[j]}) at its torque limit {limits.tau_m_max[j]:.4g} N m for "
                      f"{100 * metrics.saturated_fraction[j]:.1f} % of the run, longest {metrics.saturated_longest[j]:.3g} s "

@@ -34,7 +34,8 @@ _STYLE = (
     "th{background:#f0f0f0;font-weight:600}td.num{text-align:right;font-variant-numeric:tabular-nums}"
     "td.text{text-align:left}th.num{text-align:right}th.text{text-align:left}"
     "code{background:#f2f2f2;padding:0 .25em;border-radius:3px;font-size:.92em}"
-    "pre{background:#f6f6f6;padding:.6em .8em;white-space:pre-wrap;overflow-wrap:anywhere;font-size:.85em}"
+    "pre{background:#f6f6f6;padding:.6em .8em;overflow-x:auto;font-size:.85em}"
+    "pre.wrap{white-space:pre-wrap;overflow-wrap:anywhere}"
     "details{margin:.6em 0}summary{cursor:pointer;color:#333}"
     ".grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(36em,1fr));gap:1em;margin:1em 0}"
     "figure{margin:0}img{max-width:100%;height:auto}figcaption{color:#555;font-size:.9em}"
@@ -70,11 +71,11 @@ class Report:
         self.blocks.append(_Block("text", text))
 
     def code(self, text: str) -> None:
-        """Preformatted text (wrapped in HTML so that no line is clipped)."""
+        """Preformatted text, e.g. a console table (HTML: a long line scrolls sideways, columns stay aligned)."""
         self.blocks.append(_Block("code", text))
 
     def details(self, summary: str, text: str) -> None:
-        """Preformatted text folded under a one-line ``summary`` (HTML ``<details>``)."""
+        """Preformatted text folded under a one-line ``summary`` (HTML ``<details>``; long lines wrap, none clipped)."""
         self.blocks.append(_Block("details", (summary, text)))
 
     def table(self, header: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
@@ -130,7 +131,8 @@ class Report:
                 body.append(f"<pre>{esc(block.data.rstrip())}</pre>")
             elif block.kind == "details":
                 summary, text = block.data
-                body.append(f"<details><summary>{inline_html(summary)}</summary><pre>{esc(text.rstrip())}</pre></details>")
+                body.append(f'<details><summary>{inline_html(summary)}</summary>'
+                            f'<pre class="wrap">{esc(text.rstrip())}</pre></details>')
             elif block.kind == "table":
                 header, rows, numeric = block.data
                 cls = ["num" if num else "text" for num in numeric]
