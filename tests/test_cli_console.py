@@ -171,3 +171,19 @@ def test_console_tables_size_their_columns_to_the_content():
     lines = text.splitlines()
     assert len({len(line) for line in lines}) == 1  # right-aligned last column: every line as wide
     assert lines[2].startswith(LONG + "  ") and lines[1].split() == ["shoulder", "0.001000"]
+
+
+def test_a_run_past_its_limits_without_clipping_says_so(tmp_path):
+    """--no-saturation: nothing is clipped, so nothing "saturates"; the motors asked for more are still named."""
+    out = tmp_path / "t"
+    res = _manip("track", "scara", "--controller", "ct", "--segment-time", "0.5", "--no-saturation", "--no-plots",
+                 "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    met = json.loads((out / "metrics.json").read_text())
+    limit = met["torque_limit"]["tau_m_max"]
+    over = [j for j in range(4) if met["peak_motor_torque"][j] > limit[j]]
+    lines = [line for line in res.stderr.splitlines() if "warning: motor" in line]
+    assert over and len(lines) == len(over)
+    for line, j in zip(lines, over):
+        assert f"motor {j + 1} ({met['joints'][j]}) peaks at {met['peak_motor_torque'][j]:.4g} N m" in line
+        assert "(not clipped)" in line and "default rule" in line
