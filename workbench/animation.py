@@ -97,6 +97,7 @@ def animate_arm(
 
     fig = _figure(5.5)
     ax = fig.add_subplot(projection="3d")
+    fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.9)  # the 3-D box fills the frame
     _setup_axes(ax, centre, half, robot.name)
     _draw_base(ax, centre[2] - half)
     ax.view_init(elev=25, azim=-60)
