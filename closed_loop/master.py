@@ -500,8 +500,8 @@ def closed_loop_through_fmu(robot: Robot, design: RobotDesign, trajectory: Traje
     trajectory
         Reference.
     workdir
-        Folder for the FMUs (``<plant>.fmu``, ``<robot>_<kind>_controller.fmu``); an FMU this process
-        already built there from the same inputs is reused.
+        Folder for the FMUs (``<plant>.fmu``, ``<robot>_<kind>_controller.fmu``), created only when
+        one is built; an FMU this process already built there from the same inputs is reused.
     controller_fmu
         Run the controller as an FMU (True) or as the Python controller (False).
     rate_hz
@@ -525,7 +525,8 @@ def closed_loop_through_fmu(robot: Robot, design: RobotDesign, trajectory: Traje
         As :func:`closed_loop.simulate.simulate_tracking` returns.
     """
     folder = Path(workdir)
-    folder.mkdir(parents=True, exist_ok=True)
+    if plant_fmu is None or controller_fmu:  # created only when an FMU is written there: no empty folder left
+        folder.mkdir(parents=True, exist_ok=True)
     plant = robot if plant is None else plant
     controller = design.controller(rate_hz, saturate=saturate)
     if plant_fmu is None:

@@ -28,6 +28,9 @@ class TrackingMetrics:
         (n,) max |G qd|, rad/s at the motor.
     saturated_fraction
         (n,) fraction of control periods with the torque at its limit.
+    saturated_longest, saturated_longest_start
+        (n,) longest unbroken stretch of control periods at the limit, s, and the time it starts, s
+        (NaN when the motor never saturates).
     rate_hz, wall_time
         Control rate (Hz) and simulation wall time (s).
     """
@@ -41,8 +44,15 @@ class TrackingMetrics:
     peak_motor_torque: np.ndarray
     peak_motor_velocity: np.ndarray
     saturated_fraction: np.ndarray
+    saturated_longest: np.ndarray
+    saturated_longest_start: np.ndarray
     rate_hz: float
     wall_time: float
+
+    @property
+    def saturated(self) -> np.ndarray:
+        """(n,) indices of the motors that reached their limit at least once."""
+        return np.flatnonzero(self.saturated_fraction > 0)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists, one entry per joint)."""
@@ -50,7 +60,10 @@ class TrackingMetrics:
             "controller": self.controller, "robot": self.robot, "joints": list(self.joints), "units": list(self.units),
             "rms_error": self.rms_error.tolist(), "max_error": self.max_error.tolist(),
             "peak_motor_torque": self.peak_motor_torque.tolist(), "peak_motor_velocity": self.peak_motor_velocity.tolist(),
-            "saturated_fraction": self.saturated_fraction.tolist(), "rate_hz": self.rate_hz, "wall_time": self.wall_time,
+            "saturated_fraction": self.saturated_fraction.tolist(),
+            "saturated_longest_s": self.saturated_longest.tolist(),
+            "saturated_longest_start_s": [None if v != v else v for v in self.saturated_longest_start.tolist()],
+            "rate_hz": self.rate_hz, "wall_time": self.wall_time,
         }
 
 
@@ -109,12 +122,27 @@ class TrackingResult:
         """RMS / max error, peak motor torque and velocity, saturation per joint."""
         e = self.error
         if self.tau_m_max is None:
-            sat = np.zeros(self.G.size)
+            at_limit = np.zeros(self.tau_m.shape, dtype=bool)
         else:
-            sat = np.mean(np.abs(self.tau_m) >= self.tau_m_max * (1 - 1e-12), axis=0)
+            at_limit = np.abs(self.tau_m) >= self.tau_m_max * (1 - 1e-12)
+        runs = [_longest_run(at_limit[:, j]) for j in range(at_limit.shape[1])]
+        dt = 1.0 / self.rate_hz
         return TrackingMetrics(
             controller=self.controller, robot=self.robot, joints=self.joints, units=self.units,
             rms_error=np.sqrt(np.mean(e * e, axis=0)), max_error=np.max(np.abs(e), axis=0),
             peak_motor_torque=np.max(np.abs(self.tau_m), axis=0), peak_motor_velocity=np.max(np.abs(self.qd_m), axis=0),
-            saturated_fraction=sat, rate_hz=self.rate_hz, wall_time=self.wall_time,
+            saturated_fraction=np.mean(at_limit, axis=0),
+            saturated_longest=np.array([length * dt for length, _ in runs]),
+            saturated_longest_start=np.array([self.t[k] if length else np.nan for length, k in runs]),
+            rate_hz=self.rate_hz, wall_time=self.wall_time,
         )
+
+
+def _longest_run(mask: np.ndarray) -> tuple[int, int]:
+    """Length and first index of the longest run of True in the 1-D ``mask``; (0, 0) if none."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if starts.size == 0:
+        return 0, 0
+    k = int(np.argmax(ends - starts))
+    return int(ends[k] - starts[k]), int(starts[k])

@@ -103,6 +103,7 @@ class RobotDesign:
                 rep["max_step_unsaturated_j"] = float(lim.tau_m_max[k] / peak) if peak > 0 else "inf"
                 entry["design"] = rep
             entry["tau_m_max"] = float(lim.tau_m_max[k])
+            entry["tau_m_max_source"] = lim.source[k]
             joints.append(entry)
         return {
             "robot": self.robot.name,
@@ -117,8 +118,7 @@ class RobotDesign:
                 "units": "gains *_m motor side (N m/rad, N m s/rad, N m/(rad s)); *_j joint side; computed torque "
                          "outer loops in 1/s^2, 1/s; frequencies rad/s; times s; margins: factor and deg",
             },
-            "torque_limit": {"rule": lim.rule, "tau_m_max": lim.tau_m_max.tolist(),
-                             "tau_m_peak_task": lim.tau_m_peak_task.tolist(), "tau_m_hold": lim.tau_m_hold.tolist()},
+            "torque_limit": lim.to_dict(),
             "joints": joints,
         }
 

@@ -33,9 +33,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from model.description import TORQUE_LIMIT_FROM_FILE, TORQUE_LIMIT_FROM_RULE
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -163,6 +165,11 @@ class TorqueLimits:
         (n,) peak |tau_i / G_i| along the reference task.
     tau_m_hold
         (n,) peak |g_i / G_i| over the workspace samples.
+    source
+        (n,) where each limit comes from: :data:`~model.description.TORQUE_LIMIT_FROM_FILE`
+        (the robot file's ``torque_limit``) or :data:`~model.description.TORQUE_LIMIT_FROM_RULE`.
+    file
+        Name of the robot file (no folder), or "".
     rule
         The rule in words.
     """
@@ -170,7 +177,24 @@ class TorqueLimits:
     tau_m_max: np.ndarray
     tau_m_peak_task: np.ndarray
     tau_m_hold: np.ndarray
+    source: tuple[str, ...] = ()
+    file: str = ""
     rule: str = TORQUE_LIMIT_RULE
+
+    def provenance(self, i: int, detail: bool = False) -> str:
+        """Where motor ``i``'s (0-based) limit comes from, in words: "robot file scara.toml" or "default rule";
+        ``detail``: the rule's headroom added (a console line that stands alone)."""
+        if self.source and self.source[i] == TORQUE_LIMIT_FROM_FILE:
+            return f"{TORQUE_LIMIT_FROM_FILE} {self.file}".rstrip() + (" (its torque_limit)" if detail else "")
+        return TORQUE_LIMIT_FROM_RULE + (f" ({TORQUE_LIMIT_FACTOR:g}x headroom over the reference task's need; "
+                                         "the robot file rates no motor)" if detail else "")
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dict: the limits, their sources, the needs they were sized on, the rule."""
+        return {"tau_m_max": self.tau_m_max.tolist(), "source": list(self.source),
+                "provenance": [self.provenance(i, detail=True) for i in range(self.tau_m_max.size)],
+                "tau_m_peak_task": self.tau_m_peak_task.tolist(), "tau_m_hold": self.tau_m_hold.tolist(),
+                "rule": self.rule}
 
 
 def torque_limits(robot: Robot, reference: Trajectory, Q_workspace: np.ndarray,
@@ -198,9 +222,12 @@ def torque_limits(robot: Robot, reference: Trajectory, Q_workspace: np.ndarray,
     else:
         fallback = float(np.max(need)) if np.max(need) > 0 else 1.0
         limit = factor * np.where(need > 0, need, fallback)
-    stated = [lk.torque_limit for lk in robot.description.links]
+    desc = robot.description
+    stated = [lk.torque_limit for lk in desc.links]
     limit = np.array([rule if rated is None else rated for rule, rated in zip(limit, stated)])
-    return TorqueLimits(tau_m_max=limit, tau_m_peak_task=peak, tau_m_hold=hold)
+    return TorqueLimits(tau_m_max=limit, tau_m_peak_task=peak, tau_m_hold=hold,
+                        source=tuple(desc.torque_limit_source(i) for i in range(desc.n)),
+                        file=Path(desc.path).name if desc.path else "")
 
 
 @dataclass(frozen=True)

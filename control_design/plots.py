@@ -19,15 +19,26 @@ from .responses import BodeResponse, StepResponse
 __all__ = ["bode_plot", "step_plot"]
 
 
+def _margin_arrow(ax, w: float, y0: float, y1: float, color: str, text: str, right: bool) -> None:
+    """A double-headed arrow at frequency ``w`` from ``y0`` to ``y1``, labelled ``text`` beside it."""
+    ax.annotate("", xy=(w, y1), xytext=(w, y0), arrowprops={"arrowstyle": "<->", "color": color, "lw": 1.2,
+                                                          "shrinkA": 0, "shrinkB": 0})
+    ax.annotate(text, xy=(w, 0.5 * (y0 + y1)), xytext=(6 if right else -6, 0), textcoords="offset points",
+                ha="left" if right else "right", va="center", fontsize=8, color=color,
+                bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
+
+
 def bode_plot(responses: Sequence[BodeResponse], title: str = "") -> Figure:
     """Magnitude and phase of loop transfers with their margins marked.
 
-    Gain crossover: a vertical dotted line and, on the phase plot, a bar from -180 deg
-    to the phase (the phase margin). Phase crossover: a bar on the magnitude plot from
-    the magnitude to 0 dB (the gain margin). Discrete loops are dashed and end at pi / dt.
+    Gain crossover: a vertical dotted line and, on the phase plot, an arrow from -180 deg
+    to the phase labelled "PM"; phase crossover: an arrow on the magnitude plot from the
+    magnitude to 0 dB labelled "GM". Discrete loops are dashed and end at the Nyquist
+    frequency pi / dt (a grey dash-dot line). Every mark is in the legend below the axes.
     """
-    fig = Figure(figsize=(7.5, 6.0), layout="constrained")
+    fig = Figure(figsize=(7.5, 6.4), layout="constrained")
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
+    nyquist_labelled = False
     for k, r in enumerate(responses):
         color = f"C{k % 10}"
         style = "--" if r.dt is not None else "-"
@@ -38,16 +49,21 @@ def bode_plot(responses: Sequence[BodeResponse], title: str = "") -> Figure:
         phase = r.phase_deg
         ax_m.semilogx(r.omega, r.mag_db, style, color=color, label=label)
         ax_p.semilogx(r.omega, phase, style, color=color)
+        right = k % 2 == 1  # two responses at one crossover: labels either side of the arrow
         if math.isfinite(m.w_gc):
             ax_m.axvline(m.w_gc, color=color, ls=":", lw=0.8)
             ax_p.axvline(m.w_gc, color=color, ls=":", lw=0.8)
             ph = float(np.interp(math.log(m.w_gc), np.log(r.omega), phase))
-            ax_p.plot([m.w_gc, m.w_gc], [ph - m.pm, ph], color=color, lw=2.5)  # from the -180 deg line (mod 360)
+            _margin_arrow(ax_p, m.w_gc, ph - m.pm, ph, color, f"PM {m.pm:.1f} deg", right)  # from -180 deg (mod 360)
         if math.isfinite(m.gm) and math.isfinite(m.w_pc):
-            ax_m.plot([m.w_pc, m.w_pc], [-m.gm_db, 0.0], color=color, lw=2.5)
             ax_m.axvline(m.w_pc, color=color, ls=":", lw=0.8)
+            _margin_arrow(ax_m, m.w_pc, -m.gm_db, 0.0, color, f"GM {m.gm_db:.1f} dB", right)
         if r.dt is not None:
-            ax_m.axvline(math.pi / r.dt, color="0.5", ls="-.", lw=0.8)
+            ax_m.axvline(math.pi / r.dt, color="0.5", ls="-.", lw=0.8,
+                         label=None if nyquist_labelled else "Nyquist frequency pi/dt")
+            ax_p.axvline(math.pi / r.dt, color="0.5", ls="-.", lw=0.8)
+            nyquist_labelled = True
+    ax_m.plot([], [], ls=":", color="0.3", lw=0.8, label="gain (PM) and phase (GM) crossovers")
     ax_m.axhline(0.0, color="k", lw=0.6)
     ax_p.axhline(-180.0, color="k", lw=0.6)
     ax_m.set_ylabel("|L| [dB]")
@@ -55,7 +71,7 @@ def bode_plot(responses: Sequence[BodeResponse], title: str = "") -> Figure:
     ax_p.set_xlabel("frequency [rad/s]")
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, which="both", alpha=0.3)
-    ax_m.legend(fontsize=7, loc="lower left")
+    fig.legend(*ax_m.get_legend_handles_labels(), loc="outside lower center", fontsize=7, ncols=1, frameon=False)
     fig.suptitle(title or "Loop transfer L = C P with margins")
     return fig
 

@@ -51,6 +51,8 @@ __all__ = [
     "BUILTIN_DIR",
     "BUILTIN_ROBOTS",
     "JOINT_TYPES",
+    "TORQUE_LIMIT_FROM_FILE",
+    "TORQUE_LIMIT_FROM_RULE",
     "identifier_from_name",
     "pose_matrix",
     "rpy_matrix",
@@ -58,6 +60,10 @@ __all__ = [
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
 BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560", "panda", "ur5")
+#: Where a motor's torque limit comes from: its ``torque_limit`` in the robot file, or the design's
+#: default rule (``control_design.joint_model.TORQUE_LIMIT_RULE``) when the file states none.
+TORQUE_LIMIT_FROM_FILE = "robot file"
+TORQUE_LIMIT_FROM_RULE = "default rule"
 JOINT_TYPES = ("revolute", "prismatic")
 CONVENTIONS = ("standard", "modified", "urdf")
 #: The accepted spellings of the ``[units]`` table: SI only, one entry per quantity.
@@ -179,6 +185,10 @@ class RobotDescription:
     def q_rest(self) -> np.ndarray:
         """Rest configuration (m or rad per joint); zeros if the file gives none."""
         return np.zeros(self.n) if self.rest is None else np.array(self.rest, dtype=float)
+
+    def torque_limit_source(self, i: int) -> str:
+        """Where motor ``i``'s (0-based) torque limit comes from: :data:`TORQUE_LIMIT_FROM_FILE` or :data:`TORQUE_LIMIT_FROM_RULE`."""
+        return TORQUE_LIMIT_FROM_RULE if self.links[i].torque_limit is None else TORQUE_LIMIT_FROM_FILE
 
     @property
     def joint_types(self) -> str:

@@ -13,30 +13,33 @@ pytestmark = pytest.mark.filterwarnings("ignore::model.description.InertiaConsis
 def test_robots_lists_every_builtin(capsys):
     assert main(["robots"]) == 0
     out = capsys.readouterr().out
-    listed = [line.split()[0] for line in out.splitlines() if line.strip()]
+    lines = out.splitlines()
+    assert lines[0].split()[:3] == ["robot", "joints", "types"]
+    listed = [line.split()[0] for line in lines[1:] if line.strip()]
     assert listed == list(BUILTIN_ROBOTS)
-    assert "scara      4 joints (RRPR  )" in out
+    assert lines[1].split()[:4] == ["scara", "4", "RRPR", "SCARA"]
 
 
 def test_info_scara_prints_the_dh_table_with_units_and_the_motor_data(capsys):
     assert main(["info", "scara"]) == 0
     out = capsys.readouterr().out
     lines = out.splitlines()
-    for heading in ("a [m]", "alpha [deg]", "d [m]", "theta [deg]", "m [kg]", "com [m]",
-                    "Jm [kg m^2]", "B [N m s/rad]", "gravity [m/s^2]"):
+    for heading in ("a [m]", "alpha [rad]", "alpha [deg]", "d [m]", "theta [rad]", "m [kg]", "com [m]",
+                    "Jm [kg m^2]", "B [N m s/rad]", "gravity [m/s^2]", "tau_max [N m]"):
         assert heading in out, heading
-    dh = [line.split() for line in lines if line.split()[:2] in (["1", "revolute"], ["2", "revolute"], ["3", "prismatic"], ["4", "revolute"])]
-    assert [row[2:6] for row in dh] == [
-        ["2.0000", "0.00", "0.0000", "0.00"],
-        ["2.0000", "180.00", "0.0000", "0.00"],
-        ["0.0000", "0.00", "0.0000", "0.00"],
-        ["0.0000", "0.00", "0.0000", "0.00"],
+    dh = [line.split() for line in lines if line.split()[:3] in (["1", "shoulder", "revolute"], ["2", "elbow", "revolute"],
+                                                                 ["3", "quill", "prismatic"], ["4", "wrist", "revolute"])]
+    assert [row[3:8] for row in dh] == [
+        ["2.0", "0.0", "0", "0.0", "0.0"],
+        ["2.0", "3.141592653589793", "180", "0.0", "0.0"],
+        ["0.0", "0.0", "0", "0.0", "0.0"],
+        ["0.0", "0.0", "0", "0.0", "0.0"],
     ]
     motor_header = lines.index(next(line for line in lines if "Jm [kg m^2]" in line))
     motors = [line.split() for line in lines[motor_header + 1: motor_header + 5]]
-    assert [row[2] for row in motors] == ["-62.6111", "107.815", "-53.7063", "76.0364"]
-    assert [row[1] for row in motors] == ["0.0002", "0.0002", "0.0002", "3.3e-05"]
-    assert "[0.000, 3.500] m" in out  # the prismatic joint's limits in metres
+    assert [row[3] for row in motors] == ["-62.6111", "107.815", "-53.7063", "76.0364"]
+    assert [row[2] for row in motors] == ["0.0002", "0.0002", "0.0002", "3.3e-05"]
+    assert "[0.0, 3.5]" in out  # the prismatic joint's limits, as in the file (m)
 
 
 def test_unknown_robot_is_a_one_line_error_with_status_2(capsys):

@@ -364,5 +364,7 @@ def test_info_prints_joint_origins_and_axes_of_a_urdf_robot(capsys):
     lines = capsys.readouterr().out.splitlines()
     header = lines.index("URDF joints: origin of joint i in link frame i-1 (xyz, rpy = URDF <origin>), unit axis")
     # shoulder_lift_joint: <origin rpy="0.0 1.57079632679 0.0" xyz="0.0 0.13585 0.0"/>, <axis xyz="0 1 0"/>
-    assert lines[header + 3].split() == ["2", "revolute", "[0.0000,", "0.1358,", "0.0000]", "[0.00,", "90.00,", "0.00]",
-                                         "[0.0000,", "1.0000,", "0.0000]", "[-360.0,", "360.0]", "deg"]
+    # xyz, axis and limits exactly as in the file; rpy in deg to 6 digits
+    assert lines[header + 3].split() == ["2", "shoulder_lift_joint", "revolute", "[0.0,", "0.13585,", "0.0]",
+                                         "[0,", "90,", "0]", "[0.0,", "1.0,", "0.0]",
+                                         "[-6.28318530718,", "6.28318530718]", "rad"]

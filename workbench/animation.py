@@ -13,6 +13,7 @@ import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from model.files import atomic_path
 from model.robot import Robot
@@ -35,9 +36,11 @@ def _setup_axes(ax, centre: np.ndarray, half: float, title: str) -> None:
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]")
+    for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y"), (ax.zaxis, "z")):
+        axis.set_major_locator(MaxNLocator(nbins=4))  # few ticks: the 3-D projection crowds them
+        axis.set_tick_params(labelsize=8, pad=1)
+        axis.set_label_text(f"{name} [m]", fontsize=9)
+        axis.labelpad = 2
     ax.set_title(title)
 
 
@@ -94,6 +97,7 @@ def animate_arm(
 
     fig = _figure(5.5)
     ax = fig.add_subplot(projection="3d")
+    fig.subplots_adjust(left=0.02, right=0.93, bottom=0.04, top=0.9)  # the 3-D box fills the frame
     _setup_axes(ax, centre, half, robot.name)
     _draw_base(ax, centre[2] - half)
     ax.view_init(elev=25, azim=-60)

@@ -13,7 +13,8 @@ import math
 
 from model.errors import InputError
 
-__all__ = ["UsageError", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail", "positive_float"]
+__all__ = ["UsageError", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
+           "positive_float"]
 
 class UsageError(InputError):
     """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
@@ -87,3 +88,9 @@ def add_spec_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rate", type=float, default=DEFAULT_RATE_HZ, metavar="HZ",
                    help=f"control rate, Hz (default {DEFAULT_RATE_HZ:g}; must be >= 10 x bandwidth in Hz)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
+
+
+def add_no_plots(p: argparse.ArgumentParser) -> None:
+    """``--no-plots``, for every command that draws: numbers and JSON only, no PNG or GIF (scripted runs)."""
+    p.add_argument("--no-plots", action="store_true",
+                   help="write no PNG or GIF (numbers and JSON only; drawing is most of a short run's time)")

@@ -18,8 +18,8 @@ from typing import Sequence
 from model.errors import WorkbenchError
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_track
-from . import cmd_teach, cmd_workspace  # teach page and workspace figure (wt-teach)
-from .args import UsageError
+from . import cmd_teach, cmd_workspace  # teach page and workspace figure
+from .args import UsageError, add_no_plots
 from .outputs import check_out_dir
 
 __all__ = ["main", "build_parser", "one_line", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED"]
@@ -36,7 +36,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     check_out_dir(args.out)
     from .demo import run_demo  # heavy: FMU export, simulations, plots
 
-    result = run_demo(args.robot, args.out, bandwidth=args.bandwidth, rate_hz=args.rate, gif=not args.no_gif)
+    result = run_demo(args.robot, args.out, bandwidth=args.bandwidth, rate_hz=args.rate, gif=not args.no_gif,
+                      plots=not args.no_plots)
     return 0 if result.fmu_ok else 1
 
 
@@ -68,6 +69,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     p.add_argument("--bandwidth", type=float, default=50.0, metavar="RAD_S", help="loop bandwidth (default 50 rad/s)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="control rate (default 1000 Hz)")
     p.add_argument("--no-gif", action="store_true", help="skip the animation (its slowest step)")
+    add_no_plots(p)
     p.set_defaults(func=_cmd_demo)
     return parser
 

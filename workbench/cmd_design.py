@@ -14,13 +14,14 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .args import add_spec_args, controller_kind, finite_or_fail
+from .args import add_no_plots, add_spec_args, controller_kind, finite_or_fail
+from .formatting import format_table
 from .outputs import check_out_dir, out_dir, save_figure, write_json
 
 if TYPE_CHECKING:
     from control_design.design import RobotDesign
 
-__all__ = ["register", "run_design", "save_design_plots"]
+__all__ = ["DESIGN_HEADER", "design_rows", "register", "run_design", "save_design_plots"]
 
 
 def save_design_plots(design: RobotDesign, out: Path, prefix: str = "") -> list[Path]:
@@ -54,14 +55,34 @@ def run_design(args: argparse.Namespace) -> int:
     assert design.reports is not None
     print(f"{robot.name}: {kind} at {args.bandwidth:g} rad/s, {args.rate:g} Hz "
           f"({'computed-torque outer loops, 1/s^2 and 1/s' if kind == 'ct' else 'motor-side gains, N m/rad and N m s/rad'})")
-    print(f"{'joint':<10} {'Kp':>11} {'Kd':>11} {'w_c':>8} {'PM':>6} {'PM_d':>6} {'GM_d dB':>8} {'w_bw':>7} {'OS %':>6} {'t_s':>7}")
-    for rep in design.reports:
-        gm_db = 20 * math.log10(rep.gain_margin_d) if math.isfinite(rep.gain_margin_d) else math.inf
-        print(f"{rep.name:<10} {rep.Kp_m:>11.4g} {rep.Kd_m:>11.4g} {rep.crossover:>8.2f} {rep.phase_margin:>6.1f} "
-              f"{rep.phase_margin_d:>6.1f} {gm_db:>8.1f} {rep.bandwidth:>7.2f} {rep.overshoot:>6.1f} {rep.settling_time:>7.4f}")
+    print(format_table(DESIGN_HEADER, design_rows(design)))
+    lim = design.model.limits
+    print(format_table(["motor", "joint", "tau_max [N m]", "limit from"],
+                       [[k + 1, rep.name, float(lim.tau_m_max[k]), lim.provenance(k, detail=True)]
+                        for k, rep in enumerate(design.reports)]))
+    if args.no_plots:
+        print(f"wrote {out / 'design.json'} (--no-plots: no PNG files)")
+        return 0
     save_design_plots(design, out)
     print(f"wrote {out / 'design.json'} and {2 * robot.n} PNG files")
     return 0
+
+
+#: Columns of :func:`design_rows` (``_d``: the sampled loop at the control rate, zero-order hold and delay).
+DESIGN_HEADER = ("joint", "Kp", "Kd", "w_c [rad/s]", "PM [deg]", "PM_d [deg]", "GM_d [dB]", "w_bw [rad/s]",
+                 "rise [s]", "OS [%]", "t_s [s]")
+
+
+def design_rows(design: RobotDesign) -> list[list[object]]:
+    """One row per joint (:data:`DESIGN_HEADER`): gains, crossover, margins, bandwidth and step metrics."""
+    assert design.reports is not None
+    rows: list[list[object]] = []
+    for rep in design.reports:
+        gm = rep.gain_margin_d
+        rows.append([rep.name, rep.Kp_m, rep.Kd_m, rep.crossover, rep.phase_margin, rep.phase_margin_d,
+                     20 * math.log10(gm) if math.isfinite(gm) else "inf", rep.bandwidth, rep.rise_time,
+                     rep.overshoot, rep.settling_time])
+    return rows
 
 
 def register(subparsers: Any, full: bool = True) -> None:
@@ -70,3 +91,4 @@ def register(subparsers: Any, full: bool = True) -> None:
     p.set_defaults(func=run_design)
     if full:
         add_spec_args(p)
+        add_no_plots(p)

@@ -18,9 +18,13 @@ def _cmd_robots(args: argparse.Namespace) -> int:
     from model.description import BUILTIN_ROBOTS
     from model.loading import load_description
 
+    from .formatting import format_table
+
+    rows = []
     for name in BUILTIN_ROBOTS:
         desc = load_description(name)
-        print(f"{name:<10} {desc.n} joints ({desc.joint_types:<6})  {desc.description}")
+        rows.append([name, desc.n, desc.joint_types, desc.description])
+    print(format_table(["robot", "joints", "types", "description"], rows))
     return 0
 
 

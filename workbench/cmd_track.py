@@ -18,24 +18,30 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .args import add_spec_args, controller_kind, finite_or_fail
+from .args import add_no_plots, add_spec_args, controller_kind, finite_or_fail
+from .formatting import format_table, saturation_warnings
 from .outputs import check_out_dir, out_dir, save_figure, write_json
 from .replay import REPLAY_FILE, save_replay
 
 if TYPE_CHECKING:
-    from closed_loop.result import TrackingResult
+    from closed_loop.result import TrackingMetrics, TrackingResult
+    from control_design.joint_model import TorqueLimits
 
-__all__ = ["register", "run_track", "save_tracking_plots"]
+__all__ = ["TRACKING_HEADER", "register", "run_track", "save_tracking_plots", "tracking_rows"]
 
 
-def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "") -> list[Path]:
-    """Write ``{prefix}tracking_error.png``, ``{prefix}torques.png`` and ``{prefix}joints.png``."""
+def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "",
+                        limits: TorqueLimits | None = None) -> list[Path]:
+    """Write ``{prefix}tracking_error.png``, ``{prefix}torques.png`` and ``{prefix}joints.png``.
+
+    ``limits``: the design's torque limits, whose provenance labels the limit lines of the torque plot.
+    """
     from closed_loop.plots import joint_plot, torque_plot, tracking_error_plot
 
-    paths = []
-    for name, plot in (("tracking_error", tracking_error_plot), ("torques", torque_plot), ("joints", joint_plot)):
-        paths.append(save_figure(plot(result), out / f"{prefix}{name}.png"))
-    return paths
+    sources = None if limits is None else [limits.provenance(j) for j in range(result.G.size)]
+    figures = (("tracking_error", tracking_error_plot(result)), ("torques", torque_plot(result, limit_sources=sources)),
+               ("joints", joint_plot(result)))
+    return [save_figure(fig, out / f"{prefix}{name}.png") for name, fig in figures]
 
 
 def run_track(args: argparse.Namespace) -> int:
@@ -72,6 +78,7 @@ def run_track(args: argparse.Namespace) -> int:
         "bandwidth_rad_s": args.bandwidth, "damping": design.damping, "phase_margin_deg": args.phase_margin,
         "plant": mismatch.describe(), "payload_kg": mismatch.payload_mass,
         "tau_m_max": None if result.tau_m_max is None else result.tau_m_max.tolist(), "substeps": result.substeps,
+        "torque_limit": design.model.limits.to_dict(),
     })
     if not mismatch.is_exact:
         # The effect of the mismatch: the same controller on the exact plant, for comparison.
@@ -82,18 +89,30 @@ def run_track(args: argparse.Namespace) -> int:
         data["max_error_ratio"] = [float(a / b) if b > 0 else None for a, b in zip(met.max_error, nominal.max_error)]
     write_json(out / "metrics.json", data)
     save_replay(result, out / REPLAY_FILE)  # for `manip teach ROBOT --result DIR`
-    save_tracking_plots(result, out)
+    if not args.no_plots:
+        save_tracking_plots(result, out, limits=design.model.limits)
     print(f"{robot.name}: {kind} at {args.rate:g} Hz, {mismatch.describe()}, {result.t[-1] - result.t[0]:g} s "
           f"simulated in {met.wall_time:.2f} s")
-    print(f"{'joint':<10} {'unit':<4} {'RMS error':>11} {'max error':>11} {'peak tau_m':>11} {'peak qd_m':>10}")
-    for j, name in enumerate(met.joints):
-        print(f"{name:<10} {met.units[j]:<4} {met.rms_error[j]:>11.3e} {met.max_error[j]:>11.3e} "
-              f"{met.peak_motor_torque[j]:>11.4g} {met.peak_motor_velocity[j]:>10.4g}")
+    print(format_table(TRACKING_HEADER, tracking_rows(met)))
     if "max_error_ratio" in data:
         ratios = ", ".join("-" if r is None else f"{r:.3g}" for r in data["max_error_ratio"])
         print(f"max error / max error on the exact plant: {ratios}")
-    print(f"wrote {out / 'metrics.json'}, {out / REPLAY_FILE} (for manip teach --result) and 3 PNG files")
+    for line in saturation_warnings(met, design.model.limits):
+        print(f"manip track: warning: {line}", file=sys.stderr)
+    plots = " (--no-plots: no PNG files)" if args.no_plots else " and 3 PNG files"
+    print(f"wrote {out / 'metrics.json'}, {out / REPLAY_FILE} (for manip teach --result){plots}")
     return 0
+
+
+#: Columns of :func:`tracking_rows`.
+TRACKING_HEADER = ("joint", "unit", "RMS error", "max error", "peak tau_m [N m]", "peak qd_m [rad/s]", "at limit [%]")
+
+
+def tracking_rows(met: TrackingMetrics) -> list[list[object]]:
+    """One row per joint (:data:`TRACKING_HEADER`): errors (rad or m), peak motor torque and speed, saturation."""
+    return [[name, met.units[j], float(met.rms_error[j]), float(met.max_error[j]), float(met.peak_motor_torque[j]),
+             float(met.peak_motor_velocity[j]), 100.0 * float(met.saturated_fraction[j])]
+            for j, name in enumerate(met.joints)]
 
 
 def register(subparsers: Any, full: bool = True) -> None:
@@ -112,4 +131,5 @@ def register(subparsers: Any, full: bool = True) -> None:
     p.add_argument("--friction-scale", type=float, default=1.0, metavar="X", help="plant friction = X times the model's")
     p.add_argument("--mass-scale", type=float, default=1.0, metavar="X", help="plant link masses = X times the model's")
     p.add_argument("--no-saturation", action="store_true", help="do not clip motor torques at their limits")
+    add_no_plots(p)
     p.set_defaults(func=run_track)

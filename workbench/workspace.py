@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .report import Report
 
-__all__ = ["workspace_figure", "workspace_summary", "add_workspace_section", "WORKSPACE_PNG"]
+__all__ = ["workspace_figure", "workspace_summary", "workspace_section", "WORKSPACE_PNG"]
 
 #: File name of the figure in the demo's output folder.
 WORKSPACE_PNG = "workspace.png"
@@ -93,18 +93,24 @@ def workspace_summary(ws: "ReachableWorkspace") -> list[str]:
     ]
 
 
-def add_workspace_section(report: "Report", robot: "Robot", out: Path, samples: int = 200_000) -> list[Path]:
-    """Append the "Workspace" section (figure and numbers) to ``report``; write the figure into ``out``."""
+def workspace_section(report: "Report", out: Path, robot: "Robot", *, plots: bool = True,
+                      samples: int = 200_000) -> list[Path]:
+    """The report's "Workspace" section (numbers, and the figure written into ``out`` unless ``plots`` is False).
+
+    The shape of every section of :mod:`workbench.sections`; returns the files it wrote.
+    """
     from model.workspace import reachable_workspace
 
     from .outputs import save_figure
 
     ws = reachable_workspace(robot, samples=samples)
-    path = save_figure(workspace_figure(ws, robot), out / WORKSPACE_PNG)
     report.heading("Workspace")
     report.text("Reachable workspace of the tool point: joint vectors sampled uniformly within the limits, mapped "
                 "by fkine; the envelope of each view is the boundary of the sampled cells after a morphological "
                 "closing (holes and concavities wider than the closing disc are kept, unlike a convex hull).")
     report.code("\n".join(workspace_summary(ws)))
+    if not plots:
+        return []
+    path = save_figure(workspace_figure(ws, robot), out / WORKSPACE_PNG)
     report.image(path.name, f"{robot.name}: reachable workspace (3-D, top view, side view)")
     return [path]
