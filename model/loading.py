@@ -22,6 +22,8 @@ def load_description(name_or_path: str | Path) -> RobotDescription:
         path = BUILTIN_DIR / f"{text_name}.toml"
     else:
         path = Path(name_or_path)
+        if path.is_dir():
+            raise RobotDescriptionError(f"{path}: is a directory: expected a built-in robot name or a robot TOML or URDF file")
         if not path.is_file():
             raise RobotDescriptionError(
                 f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; no such file"

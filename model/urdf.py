@@ -31,7 +31,8 @@ from xml.etree.ElementTree import ParseError
 
 import numpy as np
 
-from .description import RobotDescription, RobotDescriptionError, _link, _Where, description_from_dict
+from .description import RobotDescription, RobotDescriptionError, _check_keys, _description, _link, _Where
+from .errors import closest
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
 from .limits import read_bounded
@@ -334,8 +335,8 @@ def _subtree(base: str, children: Mapping[str, list[Any]]) -> list[str]:
 class _JointWhere(_Where):
     """Error messages that name the URDF joint (``[joints.NAME]``) instead of a link number."""
 
-    def __init__(self, path: str, names: Sequence[str]) -> None:
-        super().__init__(path)
+    def __init__(self, path: str, names: Sequence[str], problems: list[str] | None = None) -> None:
+        super().__init__(path, problems)
         self.names = names
 
     def fail(self, link: int | None, fieldname: str, value: Any, expected: str) -> RobotDescriptionError:
@@ -371,35 +372,51 @@ def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None 
     """
     urdf_path = Path(urdf_path)
     where = str(path if path is not None else urdf_path)
-    data = dict(data or {})
     w = _Where(where)
-    for key in data:
-        if key not in _TOML_KEYS:
-            raise w.fail(None, key, data[key], f"one of the known keys of a URDF robot file ({', '.join(_TOML_KEYS)}); "
-                                               "this key is unknown")
+    desc = None
+    try:
+        desc = _urdf_description(w, urdf_path, dict(data or {}))
+    except RobotDescriptionError as exc:  # the URDF or its chain is unusable: nothing further to check
+        w.problems.extend(exc.problems)
+    w.raise_problems()
+    assert desc is not None
+    return desc
+
+
+def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> RobotDescription:
+    """:func:`description_from_urdf` with every independent problem recorded in ``w``."""
+    _check_keys(w, None, data, (), _TOML_KEYS, what="one of the known keys of a URDF robot file")
+    ends: dict[str, str | None] = {}
     for key in ("base_link", "tip_link"):
-        if key in data and not isinstance(data[key], str):
-            raise w.fail(None, key, data[key], "a URDF link name (a string)")
+        ends[key] = data.get(key) if isinstance(data.get(key), str) else None
+        if key in data and ends[key] is None:
+            w.problems.append(str(w.fail(None, key, data[key], "a URDF link name (a string)")))
     robot = read_urdf(urdf_path)
-    chain = serial_chain(robot, urdf_path, data.get("base_link"), data.get("tip_link"))
+    chain = serial_chain(robot, urdf_path, ends["base_link"], ends["tip_link"])
     names = [j.name for j in chain.joints]
     motors = data.get("joints", {})
     if not isinstance(motors, Mapping):
-        raise w.fail(None, "joints", motors, "a table of [joints.NAME] tables")
+        w.problems.append(str(w.fail(None, "joints", motors, "a table of [joints.NAME] tables")))
+        motors = {}
+    good_motors: dict[str, Mapping[str, Any]] = {}
     for name, table in motors.items():
         if name not in names:
-            raise w.fail(None, f"joints.{name}", table, f"a moving joint of the chain ({', '.join(names)}); "
-                                                          f"{name!r} is not one")
-        if not isinstance(table, Mapping):
-            raise w.fail(None, f"joints.{name}", table, "a table of motor data")
-        for key in table:
-            if key not in MOTOR_KEYS:
-                raise w.fail(None, f"joints.{name}.{key}", table[key], f"one of the motor keys ({', '.join(MOTOR_KEYS)})")
+            guess = closest(name, names)
+            hint = f"; did you mean {guess!r}?" if guess is not None else ""
+            w.problems.append(str(w.fail(None, f"joints.{name}", table, f"a moving joint of the chain ({', '.join(names)}); "
+                                                                         f"{name!r} is not one{hint}")))
+        elif not isinstance(table, Mapping):
+            w.problems.append(str(w.fail(None, f"joints.{name}", table, "a table of motor data")))
+        else:
+            start = len(w.problems)
+            _check_keys(w, None, table, (), MOTOR_KEYS, prefix=f"joints.{name}.", what="one of the motor keys")
+            if len(w.problems) == start:
+                good_motors[name] = table
     silent = [j.name for j in chain.joints if j.ignored_dynamics and j.name not in motors]
     if silent:
         warnings.warn(f"{urdf_path}: <dynamics damping friction> of joint(s) {', '.join(silent)} ignored: friction "
-                      "comes from [joints.NAME] in a robot TOML file", URDFDynamicsIgnoredWarning, stacklevel=3)
-    jw = _JointWhere(where, names)
+                      "comes from [joints.NAME] in a robot TOML file", URDFDynamicsIgnoredWarning, stacklevel=4)
+    jw = _JointWhere(w.path, names, w.problems)
     links = []
     for i, cj in enumerate(chain.joints):
         ixx, iyy, izz, ixy, iyz, ixz = (cj.inertia[0, 0], cj.inertia[1, 1], cj.inertia[2, 2], cj.inertia[0, 1],
@@ -407,20 +424,23 @@ def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None 
         fields: dict[str, Any] = {
             "joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0, "name": cj.name,
             "mass": cj.mass, "com": [float(v) for v in cj.com], "inertia": [float(v) for v in (ixx, iyy, izz, ixy, iyz, ixz)],
-            **motors.get(cj.name, {}),
+            **good_motors.get(cj.name, {}),
         }
         if cj.qlim is not None:
             fields["qlim"] = list(cj.qlim)
         link = _link(jw, i, fields)
-        links.append(dataclasses.replace(link, origin=tuple(float(v) for v in cj.origin.ravel()),
-                                         axis=tuple(float(v) for v in cj.axis)))
+        if link is not None:
+            links.append(dataclasses.replace(link, origin=tuple(float(v) for v in cj.origin.ravel()),
+                                             axis=tuple(float(v) for v in cj.axis)))
     # Top-level keys (gravity, rest, tool, tasks, ...) are checked by the TOML reader on a DH skeleton of
     # the same joints; its links are then replaced by the URDF ones.
     skeleton = {key: data[key] for key in _PASSED_ON if key in data}
     skeleton.setdefault("name", chain.robot_name)
-    skeleton["links"] = [{"joint": lk.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
-                          **({"qlim": list(lk.qlim)} if lk.qlim is not None else {})} for lk in links]
-    desc = description_from_dict(skeleton, where)
+    skeleton["links"] = [{"joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
+                          **({"qlim": list(cj.qlim)} if cj.qlim is not None else {})} for cj in chain.joints]
+    desc = _description(w, skeleton, w.path)
+    w.raise_problems()
+    assert desc is not None
     return dataclasses.replace(desc, links=tuple(links), convention="urdf", tip=_pose16(chain.tip))
 
 
@@ -431,5 +451,6 @@ def description_from_urdf_toml(data: Mapping[str, Any], path: str | Path) -> Rob
         raise _Where(str(path)).fail(None, "urdf", urdf, "the path of a URDF file, relative to this file")
     urdf_path = Path(path).resolve().parent / urdf
     if not urdf_path.is_file():
-        raise _Where(str(path)).fail(None, "urdf", urdf, f"the path of a URDF file relative to this file; {urdf_path} does not exist")
+        state = "is a directory" if urdf_path.is_dir() else "does not exist"
+        raise _Where(str(path)).fail(None, "urdf", urdf, f"the path of a URDF file relative to this file; {urdf_path} {state}")
     return description_from_urdf(urdf_path, {k: v for k, v in data.items() if k != "urdf"}, path)

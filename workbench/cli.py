@@ -18,15 +18,18 @@ from typing import Sequence
 from model.errors import WorkbenchError
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_track
-from .args import UsageError
+from .args import UsageError, in_flag_terms
 from .outputs import check_out_dir
 
-__all__ = ["main", "build_parser", "one_line", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED"]
+__all__ = ["main", "build_parser", "one_line", "error_lines", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED",
+           "MAX_PROBLEM_LINES"]
 
 #: Exit status of an expected error (bad input, failed build): argparse's own.
 EXIT_USAGE = 2
 #: Exit status after Ctrl-C (128 + SIGINT), as a shell reports it.
 EXIT_INTERRUPTED = 130
+#: Most problems of one error printed, one line each (a robot file of 32 links can hold hundreds).
+MAX_PROBLEM_LINES = 50
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -84,6 +87,18 @@ def one_line(exc: BaseException, limit: int = 400) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def error_lines(exc: WorkbenchError) -> list[str]:
+    """The lines an expected error prints: :func:`one_line` of it, or with several problems
+    (:attr:`model.errors.InputError.problems`) a count line and one complete line per problem."""
+    problems = getattr(exc, "problems", ())
+    if len(problems) <= 1:
+        return [one_line(exc)]
+    lines = [one_line(Exception(str(exc).splitlines()[0]))] + [one_line(Exception(p)) for p in problems[:MAX_PROBLEM_LINES]]
+    if len(problems) > MAX_PROBLEM_LINES:
+        lines.append(f"... and {len(problems) - MAX_PROBLEM_LINES} more problems")
+    return lines
+
+
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"manip: warning: {message}\n"
 
@@ -98,7 +113,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except WorkbenchError as exc:
-        print(f"manip {args.command}: error: {one_line(exc)}", file=sys.stderr)
+        for line in error_lines(exc):
+            print(f"manip {args.command}: error: {in_flag_terms(line, args)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"manip {args.command}: interrupted", file=sys.stderr)

@@ -34,12 +34,10 @@ def format_info(desc: RobotDescription) -> str:
         else:
             lim = f"[{lk.qlim[0]:.3f}, {lk.qlim[1]:.3f}] m"
         if desc.convention == "urdf":
-            from scipy.spatial.transform import Rotation  # only for URDF robots: keeps `manip info` light
-
-            from model.description import pose_matrix
+            from model.description import pose_matrix, tr2rpy
 
             T = pose_matrix(lk.origin)
-            xyz, rpy = T[:3, 3], Rotation.from_matrix(T[:3, :3]).as_euler("xyz") * deg  # R = Rz(y) Ry(p) Rx(r)
+            xyz, rpy = T[:3, 3], tr2rpy(T) * deg  # R = Rz(y) Ry(p) Rx(r); yaw = 0 at gimbal lock
             row = [", ".join(f"{v:.{k}f}" for v in np.round(vec, k) + 0.0) for vec, k in ((xyz, 4), (rpy, 2), (lk.axis, 4))]
             lines.append(f"{i:>2} {lk.joint:<9} {'[' + row[0] + ']':>26} {'[' + row[1] + ']':>24} {'[' + row[2] + ']':>22} {lim:>22}")
             continue
