@@ -236,7 +236,9 @@ def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
     ])
 
 
-#: Below this ``cos(pitch)`` a rotation is taken as at gimbal lock by :func:`tr2rpy` (yaw set to 0).
+#: Below this ``cos(pitch)`` a rotation is taken as at gimbal lock by :func:`tr2rpy` (yaw set to 0): far
+#: above the rounding of a computed rotation (1e-16 per entry, so a composed pose at the lock is caught)
+#: and far below what a printed angle shows.
 _GIMBAL_COS = 1e-12
 
 
@@ -247,7 +249,8 @@ def tr2rpy(R: npt.ArrayLike) -> np.ndarray:
     ``cos(pitch)`` below 1e-12) only ``roll -+ yaw`` is defined; the convention is then ``yaw = 0``
     and the whole rotation about the aligned axes is ``roll``. Roll is always solved from what is left
     of ``R`` once yaw and pitch are removed, so ``rpy_matrix(tr2rpy(R))`` reproduces ``R`` to rounding
-    also near the lock (where roll and yaw alone are ill-conditioned), and nothing warns.
+    near the lock too (where roll and yaw alone are ill-conditioned), within ``2 cos(pitch)`` (< 2e-12)
+    where the convention sets yaw to 0, and nothing warns.
 
     Parameters
     ----------

@@ -32,7 +32,6 @@ from xml.etree.ElementTree import ParseError
 import numpy as np
 
 from .description import RobotDescription, RobotDescriptionError, _check_keys, _description, _link, _Where
-from .errors import closest
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
 from .limits import read_bounded
@@ -383,8 +382,11 @@ def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None 
     return desc
 
 
-def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> RobotDescription:
-    """:func:`description_from_urdf` with every independent problem recorded in ``w``."""
+def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> RobotDescription | None:
+    """:func:`description_from_urdf` with every independent problem recorded in ``w``; None when there is any.
+
+    Raises at once when the URDF cannot be read or its chain cannot be formed (nothing further to check).
+    """
     _check_keys(w, None, data, (), _TOML_KEYS, what="one of the known keys of a URDF robot file")
     ends: dict[str, str | None] = {}
     for key in ("base_link", "tip_link"):
@@ -401,10 +403,8 @@ def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> Robot
     good_motors: dict[str, Mapping[str, Any]] = {}
     for name, table in motors.items():
         if name not in names:
-            guess = closest(name, names)
-            hint = f"; did you mean {guess!r}?" if guess is not None else ""
             w.problems.append(str(w.fail(None, f"joints.{name}", table, f"a moving joint of the chain ({', '.join(names)}); "
-                                                                         f"{name!r} is not one{hint}")))
+                                                                         f"{name!r} is not one")))
         elif not isinstance(table, Mapping):
             w.problems.append(str(w.fail(None, f"joints.{name}", table, "a table of motor data")))
         else:
@@ -439,8 +439,8 @@ def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> Robot
     skeleton["links"] = [{"joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
                           **({"qlim": list(cj.qlim)} if cj.qlim is not None else {})} for cj in chain.joints]
     desc = _description(w, skeleton, w.path)
-    w.raise_problems()
-    assert desc is not None
+    if desc is None or w.problems:
+        return None
     return dataclasses.replace(desc, links=tuple(links), convention="urdf", tip=_pose16(chain.tip))
 
 
