@@ -360,3 +360,23 @@ def test_manip_info_of_a_urdf_robot_at_gimbal_lock_warns_nothing(tmp_path):
     row = next(line for line in proc.stdout.splitlines() if line.split()[:2] == ["1", "revolute"])
     # rpy (0.3, pi/2, 0.2) is at the lock: roll - yaw = 0.1 rad = 5.73 deg, yaw 0
     assert "[5.73, 90.00, 0.00]" in row, row
+
+
+def test_a_long_unknown_key_message_keeps_its_suggestion_on_the_cli_line(tmp_path):
+    """The CLI's line limit (400 characters, for compiler output) would cut the suggestion after the key list."""
+    from workbench.cli import error_lines
+
+    link = {"joint": "revolute", "a": 0, "alpha": 0, "d": 0, "theta": 0, "viscous_fricton": 1.0}
+    with pytest.raises(RobotDescriptionError) as info:
+        description_from_dict({"name": "x", "links": [link]}, str(tmp_path / ("x" * 150) / "arm.toml"))
+    [line] = error_lines(info.value)
+    assert len(line) > 400 and line.endswith("did you mean 'viscous_friction'?")
+
+
+def test_a_design_whose_sampled_loop_is_unstable_is_one_line_not_a_traceback(tmp_path):
+    """A phase margin of 89 deg at 50 rad/s gives the SCARA's PD loop a gain that its 1 kHz sampled loop cannot
+    hold (decay rate -606 1/s); the analysis used to end in a ValueError traceback."""
+    [line] = refused_lines(manip("design", "scara", "--phase-margin", "89", "--out", str(tmp_path / "out")), "design")
+    assert re.fullmatch(r"joint \w+: the sampled \(1000 Hz\) closed loop of this pd design is not asymptotically "
+                        r"stable \(slowest decay rate -[\d.e+]+ 1/s\): expected targets the loop can meet .*", line), line
+    assert not (tmp_path / "out").exists()

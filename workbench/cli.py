@@ -15,7 +15,7 @@ import warnings
 from importlib.metadata import PackageNotFoundError, version
 from typing import Sequence
 
-from model.errors import WorkbenchError
+from model.errors import InputError, WorkbenchError
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_track
 from .args import UsageError, in_flag_terms
@@ -90,10 +90,15 @@ def one_line(exc: BaseException, limit: int = 400) -> str:
 def error_lines(exc: WorkbenchError) -> list[str]:
     """The lines an expected error prints: :func:`one_line` of it, or with several problems
     (:attr:`model.errors.InputError.problems`) a count line and one complete line per problem."""
-    problems = getattr(exc, "problems", ())
-    if len(problems) <= 1:
+    if not isinstance(exc, InputError):
         return [one_line(exc)]
-    lines = [one_line(Exception(str(exc).splitlines()[0]))] + [one_line(Exception(p)) for p in problems[:MAX_PROBLEM_LINES]]
+    # an input error is one line per problem, each a whole message: a longer limit keeps the list of
+    # known keys and the "did you mean" after it (the default limit is for compiler output)
+    problems, limit = exc.problems, 1000
+    if len(problems) == 1:
+        return [one_line(exc, limit)]
+    lines = [one_line(Exception(str(exc).splitlines()[0]), limit)]
+    lines += [one_line(Exception(p), limit) for p in problems[:MAX_PROBLEM_LINES]]
     if len(problems) > MAX_PROBLEM_LINES:
         lines.append(f"... and {len(problems) - MAX_PROBLEM_LINES} more problems")
     return lines
