@@ -41,7 +41,7 @@ class InputError(WorkbenchError, ValueError):
     @property
     def problems(self) -> tuple[str, ...]:
         """Every problem, one complete one-line message each; the message itself when there is one."""
-        return self._problems or (str(self),)
+        return getattr(self, "_problems", ()) or (str(self),)  # a subclass may skip this __init__
 
     @classmethod
     def collected(cls, problems: Sequence[str], where: str) -> "InputError":
@@ -52,7 +52,7 @@ class InputError(WorkbenchError, ValueError):
         return cls("\n".join((f"{where}: {len(problems)} problems", *problems)), problems=problems)
 
     def __reduce__(self) -> tuple[Any, ...]:  # keep the problems through pickling (worker processes)
-        return (_rebuild, (type(self), self.args, self._problems))
+        return (_rebuild, (type(self), self.args, getattr(self, "_problems", ())), dict(self.__dict__))
 
 
 class NumericalError(WorkbenchError, ArithmeticError):
@@ -64,7 +64,7 @@ class ToolchainError(WorkbenchError, RuntimeError):
 
 
 def _rebuild(cls: type[InputError], args: tuple[object, ...], problems: tuple[str, ...]) -> InputError:
-    return cls(*args, problems=problems)
+    return cls(*args, problems=problems) if problems else cls(*args)
 
 
 def closest(word: str, known: Iterable[str]) -> str | None:

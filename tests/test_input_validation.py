@@ -380,3 +380,8 @@ def test_a_design_whose_sampled_loop_is_unstable_is_one_line_not_a_traceback(tmp
     assert re.fullmatch(r"joint \w+: the sampled \(1000 Hz\) closed loop of this pd design is not asymptotically "
                         r"stable \(slowest decay rate -[\d.e+]+ 1/s\): expected targets the loop can meet .*", line), line
     assert not (tmp_path / "out").exists()
+
+
+def test_a_huge_validation_horizon_is_refused_naming_the_flag_before_the_fmu_is_opened(tmp_path):
+    [line] = refused_lines(manip("validate-fmu", str(tmp_path / "none.fmu"), "--horizon", "1e9"), "validate-fmu")
+    assert line == f"--horizon: 1e+09 s at a step of 0.001 s: 1e+12 samples, more than the sample limit of {MAX_SAMPLES}"
