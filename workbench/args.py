@@ -28,6 +28,7 @@ FLAG_OF: dict[str, str] = {
     "kind": "--controller",
     "link_mass_scale": "--mass-scale",
     "friction_scale": "--friction-scale",
+    "payload": "--payload",
     "payload_mass": "--payload",
     "segment_time": "--segment-time",
     "t_final": "the task's duration (--segment-time)",
