@@ -238,8 +238,17 @@ def test_a_binary_file_is_named(tmp_path, command, name, fragment):
 def test_a_csv_not_separated_by_commas_is_refused_naming_its_delimiter(tmp_path, text, name):
     path = tmp_path / "w.csv"
     path.write_text(text)
+    with pytest.raises(WaypointError, match="^" + re.escape(f"{path} line 1: values separated by {name}: expected "
+                                                            "comma-separated values")):
+        load_waypoints(path)
+
+
+def test_manip_track_refuses_a_semicolon_csv_instead_of_dropping_its_first_row(tmp_path):
+    """Before, the first row ``0;0;0;0`` read as one text cell, was taken for a header and dropped."""
+    path = tmp_path / "w.csv"
+    path.write_text("0;0;0;0\n0.1;0.1;0.1;0.1\n0.2;0.1;0.1;0.1\n")
     [line] = refused_lines(manip("track", "scara", "--waypoints", str(path), "--out", str(tmp_path / "out")), "track")
-    assert line.startswith(f"{path} line 1: values separated by {name}: expected comma-separated values"), line
+    assert line.startswith(f"{path} line 1: values separated by ';' (semicolons): expected comma-separated values"), line
     assert not (tmp_path / "out").exists()
 
 
