@@ -3,8 +3,10 @@
 The sub-commands live in ``workbench/cmd_*.py`` (``register(subparsers)`` each);
 this module assembles them and owns the outcome: an expected error
 (:class:`model.errors.WorkbenchError`) is printed as one line with exit status
-2, Ctrl-C as one line with exit status 130; anything else is a bug and keeps
-its traceback.
+2 (an input error with several problems as a count line and one line per
+problem), a library parameter name at its start replaced by the flag the user
+typed (:data:`workbench.args.FLAG_OF`); Ctrl-C as one line with exit status
+130; anything else is a bug and keeps its traceback.
 """
 
 from __future__ import annotations
