@@ -394,3 +394,10 @@ def test_a_design_whose_sampled_loop_is_unstable_is_one_line_not_a_traceback(tmp
 def test_a_huge_validation_horizon_is_refused_naming_the_flag_before_the_fmu_is_opened(tmp_path):
     [line] = refused_lines(manip("validate-fmu", str(tmp_path / "none.fmu"), "--horizon", "1e9"), "validate-fmu")
     assert line == f"--horizon: 1e+09 s at a step of 0.001 s: 1e+12 samples, more than the sample limit of {MAX_SAMPLES}"
+
+
+def test_a_misspelt_builtin_robot_name_gets_a_suggestion_and_a_missing_path_none():
+    with pytest.raises(RobotDescriptionError, match=r"robot 'scaara': .*; no such file; did you mean 'scara'\?$"):
+        load_description("scaara")
+    with pytest.raises(RobotDescriptionError, match=r"robot 'robots/scaara.toml': .*; no such file$"):
+        load_description("robots/scaara.toml")
