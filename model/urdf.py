@@ -215,7 +215,9 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
     RobotDescriptionError
         Naming the joint or link: duplicate names, a link with two parents (a closed chain), no single
         root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, too many
-        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``.
+        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``
+        (the first of these stops the reading); then every bad origin, axis, limit, dynamics or
+        inertial of the chain's joints and bodies, all in one error (its ``problems``).
     """
     path = Path(path)
     links = {}
@@ -277,18 +279,32 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
             raise RobotDescriptionError(f"{path}, joint {joint.name!r}: a mimic joint (it follows {joint.mimic.joint!r}) "
                                         "cannot be a joint of the serial model")
 
+    # The tree's shape is settled; the values of its joints and links (origins, axes, limits, inertials)
+    # are independent of each other: every bad one is collected, then raised together.
+    problems: list[str] = []
+
+    def checked(check: Any, default: Any, *args: Any) -> Any:
+        try:
+            return check(*args)
+        except RobotDescriptionError as exc:
+            problems.extend(exc.problems)
+            return default
+
+    def origin(joint: Any) -> np.ndarray:
+        return checked(_origin, np.eye(4), path, f"joint {joint.name!r}", joint.origin)
+
     def hanging(link_name: str, T: np.ndarray) -> list[tuple[float, np.ndarray, np.ndarray]]:
         """The bodies of ``link_name`` and of everything off the chain below it, in the frame where it sits at T."""
         out = []
         stack = [(link_name, T)]
         while stack:
             current, T_cur = stack.pop()
-            m, c, I = _body(path, links[current])
+            m, c, I = checked(_body, (0.0, np.zeros(3), np.zeros((3, 3))), path, links[current])
             R = T_cur[:3, :3]
             out.append((m, R @ c + T_cur[:3, 3], R @ I @ R.T))
             for joint in children[current]:
                 if joint.name not in on_chain:
-                    stack.append((joint.child, T_cur @ _origin(path, f"joint {joint.name!r}", joint.origin)))
+                    stack.append((joint.child, T_cur @ origin(joint)))
         return out
 
     chain: list[ChainJoint] = []
@@ -301,7 +317,7 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
             chain.append(ChainJoint(**spec, **dict(zip(("mass", "com", "inertia"), _lump(bodies)))))
 
     for joint in path_joints:
-        T = pending @ _origin(path, f"joint {joint.name!r}", joint.origin)
+        T = pending @ origin(joint)
         if joint.type == "fixed":
             pending = T
             if spec is not None:
@@ -309,10 +325,14 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
             continue
         close_link()
         spec = dict(name=joint.name, joint="prismatic" if joint.type == "prismatic" else "revolute", origin=T,
-                    axis=_unit_axis(path, joint), qlim=_limit(path, joint), ignored_dynamics=_ignored_dynamics(path, joint))
+                    axis=checked(_unit_axis, np.array([0.0, 0.0, 1.0]), path, joint),
+                    qlim=checked(_limit, None, path, joint),
+                    ignored_dynamics=checked(_ignored_dynamics, False, path, joint))
         pending = np.eye(4)
         bodies = hanging(joint.child, np.eye(4))
     close_link()
+    if problems:
+        raise RobotDescriptionError.collected(problems, str(path))
     if not chain:
         raise RobotDescriptionError(f"{path}: no moving joint between {base!r} and {tip_link!r}: expected at least one")
     # descendants of the tip that hang below it were collected by hanging(); the tip pose is what is pending

@@ -401,3 +401,22 @@ def test_a_misspelt_builtin_robot_name_gets_a_suggestion_and_a_missing_path_none
         load_description("scaara")
     with pytest.raises(RobotDescriptionError, match=r"robot 'robots/scaara.toml': .*; no such file$"):
         load_description("robots/scaara.toml")
+
+
+def test_the_bad_values_of_a_urdf_chain_are_collected(tmp_path):
+    path = tmp_path / "arm.urdf"
+    path.write_text(
+        '<robot name="a"><link name="b"/>'
+        '<link name="l1"><inertial><mass value="-1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+        '</inertial></link><link name="l2"/>'
+        '<joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><axis xyz="0 0 0"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        '<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><axis xyz="0 0 1"/>'
+        '<limit lower="1" upper="-1" effort="1" velocity="1"/></joint></robot>')
+    with pytest.raises(RobotDescriptionError) as info:
+        load_description(path)
+    assert [p.removeprefix(f"{path}, ") for p in info.value.problems] == [
+        "joint 'j1': axis [0.0, 0.0, 0.0]: expected a non-zero axis xyz",
+        "link 'l1': <inertial> mass -1.0: expected a finite mass >= 0 and a finite inertia",
+        "joint 'j2': <limit lower=1.0 upper=-1.0>: expected finite lower <= upper",
+    ]
