@@ -24,6 +24,7 @@ import numpy as np
 
 from control_design.errors import DesignSpecError
 from model.arrays import as_joint_vector
+from model.limits import MAX_SAMPLES
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -101,7 +102,11 @@ class Schedule:
         path = trajectory.path
         t0 = path.t_start
         t_end = path.t_end if t_final is None else float(t_final)
-        steps = int(round((t_end - t0) / dt))
+        periods = (t_end - t0) / dt
+        if periods + 1 > MAX_SAMPLES:
+            raise DesignSpecError(f"t_final: {t_end - t0:g} s at {1.0 / dt:g} Hz: {periods + 1:.4g} control instants, "
+                                  f"more than the sample limit of {MAX_SAMPLES}")
+        steps = int(round(periods))
         if steps < 1:
             raise DesignSpecError(f"t_final: expected at least one control period ({dt:g} s) after t0 = {t0:g} s, "
                                   f"got {t_end!r}")

@@ -19,7 +19,7 @@ import numpy as np
 from model.robot import Robot
 from model import tasks as _tasks
 from model.tasks import find_task, load_waypoints
-from model.trajectory import Trajectory
+from model.trajectory import SampleLimitError, Trajectory
 
 from .errors import TrajectoryLimitError
 
@@ -88,11 +88,16 @@ def task_trajectory(robot: Robot, task: str | None = None, waypoints: str | Path
     if segment_time is not None and not (math.isfinite(segment_time) and segment_time > 0):
         raise ValueError(f"segment_time: expected a duration > 0 s, got {segment_time!r}")
     if waypoints is not None:
-        t = load_waypoints(waypoints, robot.description, segment_time)
-        return t.trajectory(dt=_grid_step(t.segment_time, dt))
-    chosen = find_task(robot.description, reference_task_name(robot) if task is None else task)
-    T = chosen.segment_time if segment_time is None else segment_time
-    return chosen.trajectory(dt=_grid_step(T, dt), segment_time=T)
+        chosen = load_waypoints(waypoints, robot.description, segment_time)
+        T = chosen.segment_time
+    else:
+        chosen = find_task(robot.description, reference_task_name(robot) if task is None else task)
+        T = chosen.segment_time if segment_time is None else segment_time
+    try:
+        return chosen.trajectory(dt=_grid_step(T, dt), segment_time=T)
+    except SampleLimitError as exc:
+        source = "segment_time" if segment_time is not None else f"task {chosen.name!r}: segment_time"
+        raise SampleLimitError(f"{source}: {T:g} s per segment, {chosen.n_segments} segments: {exc}") from None
 
 
 def _grid_step(T: float, dt: float) -> float:

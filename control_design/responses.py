@@ -23,6 +23,7 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
+from .errors import DesignSpecError
 from .loops import JointLoop
 
 __all__ = [
@@ -264,14 +265,18 @@ def bode_response(loop: JointLoop, discrete: bool = False, omega: np.ndarray | N
                         dt=loop.dt if discrete else None, label=label or f"{loop.plant.name} ({loop.kind})")
 
 
-def _slowest_time_constant(A: np.ndarray, dt: float | None) -> float:
+def _slowest_time_constant(loop: JointLoop, A: np.ndarray, dt: float | None) -> float:
+    """The slowest time constant of the closed loop ``A`` (s); a design error if it is not asymptotically stable."""
     eig = np.linalg.eigvals(A)
     if dt is None:
         sigma = float(np.min(-eig.real))
     else:
         sigma = float(np.min(-np.log(np.maximum(np.abs(eig), 1e-300)))) / dt
     if not sigma > 0:
-        raise ValueError(f"loop: the closed loop is not asymptotically stable (slowest decay rate {sigma:.3g} 1/s)")
+        which = "continuous" if dt is None else f"sampled ({1.0 / dt:g} Hz)"
+        raise DesignSpecError(f"joint {loop.plant.name}: the {which} closed loop of this {loop.kind} design is not "
+                              f"asymptotically stable (slowest decay rate {sigma:.3g} 1/s): expected targets the loop "
+                              "can meet (a lower bandwidth or phase margin, or a higher rate)")
     return 1.0 / sigma
 
 
@@ -311,7 +316,7 @@ def step_response(loop: JointLoop, discrete: bool = False, label: str = "") -> S
     """
     A, B, C, D = loop.closed_loop_matrices(discrete)
     dt = loop.period() if discrete else None
-    t_end = 10.0 * _slowest_time_constant(A, dt)
+    t_end = 10.0 * _slowest_time_constant(loop, A, dt)
     if discrete:
         t = np.arange(0, int(math.ceil(t_end / dt)) + 1) * dt
         y = _discrete_step(A, B[:, 0], C[[0, 2], :], D[[0, 2], 0], t.size)
@@ -338,7 +343,7 @@ def disturbance_rejection(loop: JointLoop, discrete: bool = False) -> Disturbanc
     peak = float(np.max(np.abs(loop.evaluate(w, "closed", discrete, output=1, input=1))))
     peak = max(peak, dc)
     dt = loop.period() if discrete else None
-    t_end = 12.0 * _slowest_time_constant(A, dt)
+    t_end = 12.0 * _slowest_time_constant(loop, A, dt)
     if discrete:
         h = np.empty(int(math.ceil(t_end / dt)) + 1)
         h[0] = 0.0  # D[1, 1] = 0: the held disturbance shows one sample later

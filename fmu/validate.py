@@ -38,6 +38,7 @@ import numpy as np
 
 from .archive import MODEL_DESCRIPTION, check_fmu_archive
 from model.errors import InputError
+from model.limits import MAX_SAMPLES
 
 __all__ = [
     "TOLERANCES",
@@ -785,6 +786,9 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     model end earlier where the open-loop arm diverges (:func:`divergence_horizon`).
     Nothing but the FMU is needed: the robot comes from its ``resources/robot.json``.
     """
+    if t_end / step + 1 > MAX_SAMPLES:  # before any work: the runs sample every step
+        raise InputError(f"t_end: {t_end:g} s at a step of {step:g} s: {t_end / step + 1:.4g} samples, more than the "
+                         f"sample limit of {MAX_SAMPLES}")
     fmu_path = str(fmu_path)
     check_fmu_archive(fmu_path)  # FmuArchiveError (a ValueError) naming the file, before anything is extracted
     _say(progress, "validating modelDescription.xml with FMPy")

@@ -24,6 +24,7 @@ Conventions (those of the Robotics Toolbox):
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -33,11 +34,12 @@ import types
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
+import numpy.typing as npt
 
-from .errors import InputError
+from .errors import InputError, closest
 from .limits import MAX_JOINTS, MAX_WAYPOINTS
 
 __all__ = [
@@ -56,6 +58,7 @@ __all__ = [
     "identifier_from_name",
     "pose_matrix",
     "rpy_matrix",
+    "tr2rpy",
 ]
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
@@ -243,6 +246,39 @@ def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
     ])
 
 
+#: Below this ``cos(pitch)`` a rotation is taken as at gimbal lock by :func:`tr2rpy` (yaw set to 0): far
+#: above the rounding of a computed rotation (1e-16 per entry, so a composed pose at the lock is caught)
+#: and far below what a printed angle shows.
+_GIMBAL_COS = 1e-12
+
+
+def tr2rpy(R: npt.ArrayLike) -> np.ndarray:
+    """``[roll, pitch, yaw]`` (rad) with ``R = Rz(yaw) Ry(pitch) Rx(roll)``: the inverse of :func:`rpy_matrix`.
+
+    ``pitch`` is in [-pi/2, pi/2], ``roll`` and ``yaw`` in [-pi, pi]. At gimbal lock (pitch = +-pi/2,
+    ``cos(pitch)`` below 1e-12) only ``roll -+ yaw`` is defined; the convention is then ``yaw = 0``
+    and the whole rotation about the aligned axes is ``roll``. Roll is always solved from what is left
+    of ``R`` once yaw and pitch are removed, so ``rpy_matrix(tr2rpy(R))`` reproduces ``R`` to rounding
+    near the lock too (where roll and yaw alone are ill-conditioned), within ``2 cos(pitch)`` (< 2e-12)
+    where the convention sets yaw to 0, and nothing warns.
+
+    Parameters
+    ----------
+    R
+        (3, 3) rotation matrix (or the (4, 4) transform holding it).
+    """
+    R = np.asarray(R, dtype=float)[:3, :3]
+    cos_pitch = math.hypot(R[0, 0], R[1, 0])
+    pitch = math.atan2(-R[2, 0], cos_pitch)
+    yaw = math.atan2(R[1, 0], R[0, 0]) if cos_pitch > _GIMBAL_COS else 0.0
+    cy, sy, cp, sp = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch)
+    Rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    Ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    M = Ry.T @ Rz.T @ R  # = Rx(roll)
+    roll = math.atan2(M[2, 1] - M[1, 2], M[1, 1] + M[2, 2])
+    return np.array([roll, pitch, yaw])
+
+
 # --------------------------------------------------------------------------- parsing
 
 _TOP_REQUIRED = ("name", "links")
@@ -258,16 +294,35 @@ _TASK_OPTIONAL = ("segment_time", "labels", "description")
 
 
 class _Where:
-    """Builds error messages that name the file, the link and the field."""
+    """Builds error messages that name the file, the link and the field, and collects them.
 
-    def __init__(self, path: str) -> None:
+    A check raises ``w.fail(...)``; a caller that can go on to the next field runs the check
+    inside ``with w.collect():``, which records the problem instead. :meth:`raise_problems`
+    then raises one error carrying every problem (``problems`` may be shared by several).
+    """
+
+    def __init__(self, path: str, problems: list[str] | None = None) -> None:
         self.path = path or "<dict>"
+        self.problems: list[str] = [] if problems is None else problems
 
     def fail(self, link: int | None, fieldname: str, value: Any, expected: str) -> RobotDescriptionError:
         where = f"{self.path}"
         if link is not None:
             where += f", link {link + 1}"
         return RobotDescriptionError(f"{where}: field '{fieldname}' = {value!r}: expected {expected}")
+
+    @contextlib.contextmanager
+    def collect(self) -> Iterator[None]:
+        """Record a :class:`RobotDescriptionError` raised inside the block and go on after it."""
+        try:
+            yield
+        except RobotDescriptionError as exc:
+            self.problems.extend(exc.problems)
+
+    def raise_problems(self) -> None:
+        """Raise one :class:`RobotDescriptionError` holding every problem collected, if there is any."""
+        if self.problems:
+            raise RobotDescriptionError.collected(self.problems, self.path)
 
 
 def _number(w: _Where, link: int | None, name: str, value: Any, *, nonneg: bool = False, nonzero: bool = False) -> float:
@@ -289,14 +344,32 @@ def _vector(w: _Where, link: int | None, name: str, value: Any, size: int) -> tu
     return tuple(_number(w, link, f"{name}[{i}]", v) for i, v in enumerate(value))
 
 
-def _check_keys(w: _Where, link: int | None, data: Mapping[str, Any], required: Sequence[str], optional: Sequence[str]) -> None:
+def _check_keys(w: _Where, link: int | None, data: Mapping[str, Any], required: Sequence[str],
+                optional: Sequence[str], prefix: str = "", what: str = "one of the known keys") -> None:
+    """Record every missing required key and every unknown key of ``data`` (fields named ``prefix + key``).
+
+    An unknown key close to a known one (:func:`~model.errors.closest`) gets "did you mean"; a missing
+    required key with such a near-miss in the file is one problem naming both.
+    """
+    known = (*required, *optional)
+    unknown = [key for key in data if key not in known]
+    absent = [key for key in known if key not in data]
     for key in required:
-        if key not in data:
-            raise w.fail(link, key, None, "this required key (it is missing)")
-    for key in data:
-        if key not in required and key not in optional:
-            allowed = ", ".join((*required, *optional))
-            raise w.fail(link, key, data[key], f"one of the known keys ({allowed}); this key is unknown")
+        if key in data:
+            continue
+        typo = closest(key, unknown)
+        if typo is None:
+            w.problems.append(str(w.fail(link, prefix + key, None, "this required key (it is missing)")))
+        else:
+            unknown.remove(typo)
+            w.problems.append(str(w.fail(link, prefix + key, None, f"this required key (it is missing; the file has "
+                                                                    f"'{prefix}{typo}' = {data[typo]!r}: did you mean "
+                                                                    f"'{prefix}{key}'?)")))
+    for key in unknown:
+        guess = closest(key, absent)
+        hint = f"; did you mean {guess!r}?" if guess is not None else ""
+        w.problems.append(str(w.fail(link, prefix + key, data[key],
+                                     f"{what} ({', '.join(known)}); this key is unknown{hint}")))
 
 
 def _inertia(w: _Where, link: int, value: Any, note: str | None = None) -> tuple[float, ...]:
@@ -314,31 +387,12 @@ def _inertia(w: _Where, link: int, value: Any, note: str | None = None) -> tuple
         warnings.warn(
             f"{w.path}, link {link + 1}: field 'inertia' = {list(value)!r} breaks the triangle inequality "
             f"(principal moments {eig.round(9).tolist()}): no rigid body has it; using it as given",
-            InertiaConsistencyWarning, stacklevel=4,
+            InertiaConsistencyWarning, stacklevel=5,
         )
     return inertia
 
 
-def _link(w: _Where, i: int, data: Any) -> LinkDescription:
-    if not isinstance(data, Mapping):
-        raise w.fail(i, "links", data, "a table of link fields")
-    _check_keys(w, i, data, _LINK_REQUIRED, _LINK_OPTIONAL)
-    joint = data["joint"]
-    if joint not in JOINT_TYPES:
-        raise w.fail(i, "joint", joint, "'revolute' or 'prismatic'")
-    kw: dict[str, Any] = {"joint": joint}
-    for key in ("a", "alpha", "d", "theta"):
-        kw[key] = _number(w, i, key, data[key])
-    kw["mass"] = _number(w, i, "mass", data.get("mass", 0.0), nonneg=True)
-    kw["com"] = _vector(w, i, "com", data.get("com", [0.0, 0.0, 0.0]), 3)
-    note = data.get("inertia_note")
-    if note is not None and not (isinstance(note, str) and note.strip()):
-        raise w.fail(i, "inertia_note", note, "a non-empty text saying why the inertia is kept as given")
-    kw["inertia"] = _inertia(w, i, data.get("inertia", [0.0] * 6), note)
-    kw["motor_inertia"] = _number(w, i, "motor_inertia", data.get("motor_inertia", 0.0), nonneg=True)
-    kw["gear_ratio"] = _number(w, i, "gear_ratio", data.get("gear_ratio", 1.0), nonzero=True)
-    kw["viscous_friction"] = _number(w, i, "viscous_friction", data.get("viscous_friction", 0.0), nonneg=True)
-    tc = data.get("coulomb_friction", 0.0)
+def _coulomb(w: _Where, i: int, tc: Any) -> tuple[float, float]:
     if isinstance(tc, (list, tuple)):
         pos, neg = _vector(w, i, "coulomb_friction", tc, 2)
         if pos < 0 or neg > 0:
@@ -346,38 +400,78 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription:
     else:
         pos = _number(w, i, "coulomb_friction", tc, nonneg=True)
         neg = -pos
-    kw["coulomb_friction"] = (pos + 0.0, neg + 0.0)  # + 0.0 turns -0.0 into 0.0: one digest per physics
+    return (pos + 0.0, neg + 0.0)  # + 0.0 turns -0.0 into 0.0: one digest per physics
+
+
+def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
+    """Link ``i`` of ``data``, every bad field recorded in ``w``; None when it has any."""
+    if not isinstance(data, Mapping):
+        raise w.fail(i, "links", data, "a table of link fields")
+    start = len(w.problems)
+    _check_keys(w, i, data, _LINK_REQUIRED, _LINK_OPTIONAL)
+    kw: dict[str, Any] = {}
+    if "joint" in data:
+        with w.collect():
+            if data["joint"] not in JOINT_TYPES:
+                raise w.fail(i, "joint", data["joint"], "'revolute' or 'prismatic'")
+            kw["joint"] = data["joint"]
+    for key in ("a", "alpha", "d", "theta"):
+        if key in data:
+            with w.collect():
+                kw[key] = _number(w, i, key, data[key])
+    for key, default, nonneg in (("mass", 0.0, True), ("motor_inertia", 0.0, True), ("viscous_friction", 0.0, True),
+                                 ("rotor_mass", 0.0, True)):
+        with w.collect():
+            kw[key] = _number(w, i, key, data.get(key, default), nonneg=nonneg)
+    with w.collect():
+        kw["gear_ratio"] = _number(w, i, "gear_ratio", data.get("gear_ratio", 1.0), nonzero=True)
+    with w.collect():
+        kw["com"] = _vector(w, i, "com", data.get("com", [0.0, 0.0, 0.0]), 3)
+    with w.collect():
+        note = data.get("inertia_note")
+        if note is not None and not (isinstance(note, str) and note.strip()):
+            raise w.fail(i, "inertia_note", note, "a non-empty text saying why the inertia is kept as given")
+        kw["inertia"] = _inertia(w, i, data.get("inertia", [0.0] * 6), note)
+    with w.collect():
+        kw["coulomb_friction"] = _coulomb(w, i, data.get("coulomb_friction", 0.0))
     if "qlim" in data:
-        lo, hi = _vector(w, i, "qlim", data["qlim"], 2)
-        if not lo < hi:
-            raise w.fail(i, "qlim", data["qlim"], "[lower, upper] with lower < upper")
-        kw["qlim"] = (lo, hi)
+        with w.collect():
+            lo, hi = _vector(w, i, "qlim", data["qlim"], 2)
+            if not lo < hi:
+                raise w.fail(i, "qlim", data["qlim"], "[lower, upper] with lower < upper")
+            kw["qlim"] = (lo, hi)
     if "name" in data:
-        if not isinstance(data["name"], str):
-            raise w.fail(i, "name", data["name"], "a string")
-        kw["name"] = data["name"]
-    kw["rotor_mass"] = _number(w, i, "rotor_mass", data.get("rotor_mass", 0.0), nonneg=True)
+        with w.collect():
+            if not isinstance(data["name"], str):
+                raise w.fail(i, "name", data["name"], "a string")
+            kw["name"] = data["name"]
     if "torque_limit" in data:
-        limit = _number(w, i, "torque_limit", data["torque_limit"])
-        if limit <= 0:
-            raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
-        kw["torque_limit"] = limit
+        with w.collect():
+            limit = _number(w, i, "torque_limit", data["torque_limit"])
+            if limit <= 0:
+                raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
+            kw["torque_limit"] = limit
     if "flip" in data:
-        if not isinstance(data["flip"], bool):
-            raise w.fail(i, "flip", data["flip"], "true or false")
-        kw["flip"] = data["flip"]
-    return LinkDescription(**kw)
+        with w.collect():
+            if not isinstance(data["flip"], bool):
+                raise w.fail(i, "flip", data["flip"], "true or false")
+            kw["flip"] = data["flip"]
+    return None if len(w.problems) > start else LinkDescription(**kw)
 
 
 def _pose(w: _Where, key: str, value: Any) -> tuple[float, ...] | None:
     """``{xyz = [...], rpy = [...]}`` (m, rad) as 16 row-major floats; None for the identity."""
     if not isinstance(value, Mapping):
         raise w.fail(None, key, value, "a table {xyz = [x, y, z], rpy = [roll, pitch, yaw]} (m, rad)")
-    for k in value:
-        if k not in _POSE_KEYS:
-            raise w.fail(None, f"{key}.{k}", value[k], "one of the known keys (xyz, rpy); this key is unknown")
-    xyz = _vector(w, None, f"{key}.xyz", value.get("xyz", [0.0, 0.0, 0.0]), 3)
-    rpy = _vector(w, None, f"{key}.rpy", value.get("rpy", [0.0, 0.0, 0.0]), 3)
+    start = len(w.problems)
+    _check_keys(w, None, value, (), _POSE_KEYS, prefix=f"{key}.")
+    parts = []
+    for part in _POSE_KEYS:
+        with w.collect():
+            parts.append(_vector(w, None, f"{key}.{part}", value.get(part, [0.0, 0.0, 0.0]), 3))
+    if len(w.problems) > start:
+        return None
+    xyz, rpy = parts
     if not any(xyz) and not any(rpy):
         return None
     T = np.eye(4)
@@ -389,108 +483,157 @@ def _pose(w: _Where, key: str, value: Any) -> tuple[float, ...] | None:
 def _units(w: _Where, value: Any) -> Mapping[str, str]:
     if not isinstance(value, Mapping):
         raise w.fail(None, "units", value, "a table of quantity = SI unit")
+    _check_keys(w, None, value, (), tuple(SI_UNITS), prefix="units.", what="one of the known quantities")
     for key, unit in value.items():
-        if key not in SI_UNITS:
-            raise w.fail(None, f"units.{key}", unit, f"one of the known quantities ({', '.join(SI_UNITS)}); this key is unknown")
-        if unit not in SI_UNITS[key]:
+        if key in SI_UNITS and unit not in SI_UNITS[key]:
             spellings = " or ".join(repr(u) for u in SI_UNITS[key])
-            raise w.fail(None, f"units.{key}", unit, f"the SI unit {spellings}: robot files are in SI units only")
+            w.problems.append(str(w.fail(None, f"units.{key}", unit, f"the SI unit {spellings}: robot files are in SI units only")))
     return dict(value)
 
 
-def _task(w: _Where, k: int, data: Any, links: Sequence[LinkDescription], names: set[str]) -> Mapping[str, Any]:
+def _qlims(links: Sequence[LinkDescription | None]) -> list[tuple[float, float] | None]:
+    """Each joint's limits; None where it states none or where the link itself is bad."""
+    return [None if link is None else link.qlim for link in links]
+
+
+def _task(w: _Where, k: int, data: Any, qlims: Sequence[tuple[float, float] | None], names: set[str]) -> Mapping[str, Any]:
     where = f"tasks[{k + 1}]"
     if not isinstance(data, Mapping):
         raise w.fail(None, where, data, "a [[tasks]] table")
-    for key in _TASK_REQUIRED:
-        if key not in data:
-            raise w.fail(None, f"{where}.{key}", None, "this required key (it is missing)")
-    for key in data:
-        if key not in _TASK_REQUIRED and key not in _TASK_OPTIONAL:
-            allowed = ", ".join((*_TASK_REQUIRED, *_TASK_OPTIONAL))
-            raise w.fail(None, f"{where}.{key}", data[key], f"one of the known keys ({allowed}); this key is unknown")
-    name = data["name"]
-    if not isinstance(name, str) or not name.strip():
-        raise w.fail(None, f"{where}.name", name, "a non-empty string")
-    if name in names:
-        raise w.fail(None, f"{where}.name", name, "a task name not used by another [[tasks]] entry")
-    names.add(name)
-    rows = data["waypoints"]
-    if not isinstance(rows, list) or len(rows) < 2:
-        raise w.fail(None, f"{where}.waypoints", rows, f"a list of at least 2 joint vectors of {len(links)} values")
-    if len(rows) > MAX_WAYPOINTS:
-        raise RobotDescriptionError(f"{w.path}: {where}.waypoints: {len(rows)} waypoints: more than the waypoint "
-                                    f"limit of {MAX_WAYPOINTS}")
-    waypoints = []
-    for r, row in enumerate(rows, 1):
-        vec = _vector(w, None, f"{where}.waypoints[{r}]", row, len(links))
-        for j, (x, link) in enumerate(zip(vec, links)):
-            if link.qlim is not None and not link.qlim[0] <= x <= link.qlim[1]:
-                raise w.fail(j, f"{where}.waypoints[{r}]", x, f"a joint value within qlim [{link.qlim[0]}, {link.qlim[1]}]")
-        waypoints.append(vec)
-    out: dict[str, Any] = {"name": name, "waypoints": tuple(waypoints)}
-    segment_time = _number(w, None, f"{where}.segment_time", data.get("segment_time", 3.0))
-    if segment_time <= 0:
-        raise w.fail(None, f"{where}.segment_time", data["segment_time"], "a duration > 0 (s)")
-    out["segment_time"] = segment_time
-    labels = data.get("labels", [f"waypoint {r}" for r in range(len(rows))])
-    if not isinstance(labels, list) or len(labels) != len(rows) or not all(isinstance(x, str) for x in labels):
-        raise w.fail(None, f"{where}.labels", labels, f"a list of {len(rows)} strings, one per waypoint")
-    out["labels"] = tuple(labels)
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        raise w.fail(None, f"{where}.description", description, "a string")
-    out["description"] = description
+    _check_keys(w, None, data, _TASK_REQUIRED, _TASK_OPTIONAL, prefix=f"{where}.")
+    out: dict[str, Any] = {}
+    if "name" in data:
+        with w.collect():
+            name = data["name"]
+            if not isinstance(name, str) or not name.strip():
+                raise w.fail(None, f"{where}.name", name, "a non-empty string")
+            if name in names:
+                raise w.fail(None, f"{where}.name", name, "a task name not used by another [[tasks]] entry")
+            names.add(name)
+            out["name"] = name
+    rows = data.get("waypoints")
+    if "waypoints" in data:
+        with w.collect():
+            if not isinstance(rows, list) or len(rows) < 2:
+                raise w.fail(None, f"{where}.waypoints", rows, f"a list of at least 2 joint vectors of {len(qlims)} values")
+            if len(rows) > MAX_WAYPOINTS:
+                raise RobotDescriptionError(f"{w.path}: {where}.waypoints: {len(rows)} waypoints: more than the waypoint "
+                                            f"limit of {MAX_WAYPOINTS}")
+            waypoints = []
+            for r, row in enumerate(rows, 1):
+                vec = _vector(w, None, f"{where}.waypoints[{r}]", row, len(qlims))
+                for j, (x, qlim) in enumerate(zip(vec, qlims)):
+                    if qlim is not None and not qlim[0] <= x <= qlim[1]:
+                        raise w.fail(j, f"{where}.waypoints[{r}]", x, f"a joint value within qlim [{qlim[0]}, {qlim[1]}]")
+                waypoints.append(vec)
+            out["waypoints"] = tuple(waypoints)
+    with w.collect():
+        segment_time = _number(w, None, f"{where}.segment_time", data.get("segment_time", 3.0))
+        if segment_time <= 0:
+            raise w.fail(None, f"{where}.segment_time", data["segment_time"], "a duration > 0 (s)")
+        out["segment_time"] = segment_time
+    if isinstance(rows, list):
+        with w.collect():
+            labels = data.get("labels", [f"waypoint {r}" for r in range(len(rows))])
+            if not isinstance(labels, list) or len(labels) != len(rows) or not all(isinstance(x, str) for x in labels):
+                raise w.fail(None, f"{where}.labels", labels, f"a list of {len(rows)} strings, one per waypoint")
+            out["labels"] = tuple(labels)
+    with w.collect():
+        description = data.get("description", "")
+        if not isinstance(description, str):
+            raise w.fail(None, f"{where}.description", description, "a string")
+        out["description"] = description
     return types.MappingProxyType(out)
+
+
+def _description(w: _Where, data: Any, path: str) -> RobotDescription | None:
+    """The description of ``data``, every independent problem recorded in ``w``; None when there is any.
+
+    Raises at once (with the problems so far) when nothing further can be checked: ``data``
+    is not a table, or it has more links than :data:`~model.limits.MAX_JOINTS`.
+    """
+    if not isinstance(data, Mapping):
+        raise w.fail(None, "<document>", data, "a TOML table")
+    start = len(w.problems)
+    _check_keys(w, None, data, _TOP_REQUIRED, _TOP_OPTIONAL)
+    if "name" in data:
+        with w.collect():
+            if not isinstance(data["name"], str) or not data["name"].strip():
+                raise w.fail(None, "name", data["name"], "a non-empty string")
+    convention = data.get("convention", "standard")
+    with w.collect():
+        if convention not in ("standard", "modified"):
+            raise w.fail(None, "convention", convention, "'standard' or 'modified' (URDF robots are read from a .urdf file)")
+    links: list[LinkDescription | None] = []
+    if "links" in data:
+        raw_links = data["links"]
+        if not isinstance(raw_links, list) or not raw_links:
+            w.problems.append(str(w.fail(None, "links", raw_links, "at least one [[links]] table")))
+        elif len(raw_links) > MAX_JOINTS:
+            raise RobotDescriptionError(f"{w.path}: {len(raw_links)} links: more than the joint-count limit of {MAX_JOINTS}")
+        else:
+            for i, lk in enumerate(raw_links):
+                link = None
+                with w.collect():
+                    link = _link(w, i, lk)
+                links.append(link)
+    with w.collect():
+        gravity = _vector(w, None, "gravity", data.get("gravity", [0.0, 0.0, -9.81]), 3)
+    rest = None
+    if "rest" in data and links:
+        with w.collect():
+            rest = _vector(w, None, "rest", data["rest"], len(links))
+            for i, (value, qlim) in enumerate(zip(rest, _qlims(links))):
+                if qlim is not None and not qlim[0] <= value <= qlim[1]:
+                    raise w.fail(i, "rest", value, f"a rest position within qlim [{qlim[0]}, {qlim[1]}]")
+    for key in ("description", "source"):
+        if key in data and not isinstance(data[key], str):
+            w.problems.append(str(w.fail(None, key, data[key], "a string")))
+    poses: dict[str, tuple[float, ...] | None] = {}
+    for key in ("base", "tool"):
+        with w.collect():
+            poses[key] = _pose(w, key, data[key]) if key in data else None
+    extra: dict[str, Any] = {}
+    if "units" in data:
+        with w.collect():
+            extra["units"] = _units(w, data["units"])
+    if "tasks" in data and links:
+        names: set[str] = set()
+        with w.collect():
+            if not isinstance(data["tasks"], list):
+                raise w.fail(None, "tasks", data["tasks"], "a list of [[tasks]] tables")
+            tasks = []
+            for k, t in enumerate(data["tasks"]):
+                with w.collect():
+                    tasks.append(_task(w, k, t, _qlims(links), names))
+            extra["tasks"] = tuple(tasks)
+    if len(w.problems) > start:
+        return None
+    return RobotDescription(
+        name=data["name"], links=tuple(links), gravity=gravity, rest=rest,  # type: ignore[arg-type]
+        description=data.get("description", ""), source=data.get("source", ""),
+        path=str(path), convention=convention, base=poses["base"], tool=poses["tool"],
+        extra=types.MappingProxyType(extra),
+    )
 
 
 def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescription:
     """Validate a parsed TOML document (or an equivalent dict) into a :class:`RobotDescription`.
 
+    Every independent problem is reported, not only the first (as FMPy's validation does).
+
     Raises
     ------
     RobotDescriptionError
-        Naming the file, the link (1-based), the field, the value and what was expected.
+        Naming the file, the link (1-based), the field, the value and what was expected; with several
+        problems, its ``problems`` holds one such message each and its message is a count line and them.
     """
     w = _Where(path)
-    if not isinstance(data, Mapping):
-        raise w.fail(None, "<document>", data, "a TOML table")
-    _check_keys(w, None, data, _TOP_REQUIRED, _TOP_OPTIONAL)
-    name = data["name"]
-    if not isinstance(name, str) or not name.strip():
-        raise w.fail(None, "name", name, "a non-empty string")
-    convention = data.get("convention", "standard")
-    if convention not in ("standard", "modified"):
-        raise w.fail(None, "convention", convention, "'standard' or 'modified' (URDF robots are read from a .urdf file)")
-    raw_links = data["links"]
-    if not isinstance(raw_links, list) or not raw_links:
-        raise w.fail(None, "links", raw_links, "at least one [[links]] table")
-    if len(raw_links) > MAX_JOINTS:
-        raise RobotDescriptionError(f"{w.path}: {len(raw_links)} links: more than the joint-count limit of {MAX_JOINTS}")
-    links = tuple(_link(w, i, lk) for i, lk in enumerate(raw_links))
-    gravity = _vector(w, None, "gravity", data.get("gravity", [0.0, 0.0, -9.81]), 3)
-    rest = None
-    if "rest" in data:
-        rest = _vector(w, None, "rest", data["rest"], len(links))
-        for i, (value, link) in enumerate(zip(rest, links)):
-            if link.qlim is not None and not link.qlim[0] <= value <= link.qlim[1]:
-                raise w.fail(i, "rest", value, f"a rest position within qlim [{link.qlim[0]}, {link.qlim[1]}]")
-    for key in ("description", "source"):
-        if key in data and not isinstance(data[key], str):
-            raise w.fail(None, key, data[key], "a string")
-    base = _pose(w, "base", data["base"]) if "base" in data else None
-    tool = _pose(w, "tool", data["tool"]) if "tool" in data else None
-    extra: dict[str, Any] = {}
-    if "units" in data:
-        extra["units"] = _units(w, data["units"])
-    if "tasks" in data:
-        if not isinstance(data["tasks"], list):
-            raise w.fail(None, "tasks", data["tasks"], "a list of [[tasks]] tables")
-        names: set[str] = set()
-        extra["tasks"] = tuple(_task(w, k, t, links, names) for k, t in enumerate(data["tasks"]))
-    return RobotDescription(
-        name=name, links=links, gravity=gravity, rest=rest,  # type: ignore[arg-type]
-        description=data.get("description", ""), source=data.get("source", ""),
-        path=str(path), convention=convention, base=base, tool=tool,
-        extra=types.MappingProxyType(extra),
-    )
+    desc = None
+    try:
+        desc = _description(w, data, path)
+    except RobotDescriptionError as exc:  # a problem that stops the checks: report it after those found so far
+        w.problems.extend(exc.problems)
+    w.raise_problems()
+    assert desc is not None
+    return desc

@@ -15,7 +15,10 @@ may catch ``ValueError`` for bad input as before:
 
 from __future__ import annotations
 
-__all__ = ["InputError", "NumericalError", "ToolchainError", "WorkbenchError"]
+import difflib
+from typing import Any, Iterable, Sequence
+
+__all__ = ["InputError", "NumericalError", "ToolchainError", "WorkbenchError", "closest"]
 
 
 class WorkbenchError(Exception):
@@ -23,7 +26,33 @@ class WorkbenchError(Exception):
 
 
 class InputError(WorkbenchError, ValueError):
-    """The input (file, field, argument) is invalid; the message names it, the value and what was expected."""
+    """The input (file, field, argument) is invalid; the message names it, the value and what was expected.
+
+    One error may carry several independent problems of the same input (every mistake of a
+    robot file, as FMPy's validation reports every problem of an FMU): :attr:`problems` holds
+    one complete one-line message per problem, and the message is a count line followed by
+    them, one per line. Build such an error with :meth:`collected`.
+    """
+
+    def __init__(self, *args: object, problems: Sequence[str] = ()) -> None:
+        super().__init__(*args)
+        self._problems = tuple(problems)
+
+    @property
+    def problems(self) -> tuple[str, ...]:
+        """Every problem, one complete one-line message each; the message itself when there is one."""
+        return getattr(self, "_problems", ()) or (str(self),)  # a subclass may skip this __init__
+
+    @classmethod
+    def collected(cls, problems: Sequence[str], where: str) -> "InputError":
+        """One error for ``problems`` (at least one) of the input ``where``; a single problem is its own message."""
+        problems = tuple(problems)
+        if len(problems) == 1:
+            return cls(problems[0], problems=problems)
+        return cls("\n".join((f"{where}: {len(problems)} problems", *problems)), problems=problems)
+
+    def __reduce__(self) -> tuple[Any, ...]:  # keep the problems through pickling (worker processes)
+        return (_rebuild, (type(self), self.args, getattr(self, "_problems", ())), dict(self.__dict__))
 
 
 class NumericalError(WorkbenchError, ArithmeticError):
@@ -32,3 +61,17 @@ class NumericalError(WorkbenchError, ArithmeticError):
 
 class ToolchainError(WorkbenchError, RuntimeError):
     """An external tool the workbench drives (C compiler, libcosim, FMU build) failed or is missing."""
+
+
+def _rebuild(cls: type[InputError], args: tuple[object, ...], problems: tuple[str, ...]) -> InputError:
+    return cls(*args, problems=problems) if problems else cls(*args)
+
+
+def closest(word: str, known: Iterable[str]) -> str | None:
+    """The entry of ``known`` most like ``word`` (a misspelt key: ``"alpah"`` -> ``"alpha"``), None if none is close.
+
+    Close means a :class:`difflib.SequenceMatcher` ratio of at least 0.6 (difflib's default:
+    one swapped or missing letter in a five-letter key is 0.8, an unrelated key is below 0.5).
+    """
+    found = difflib.get_close_matches(word, list(known), n=1)
+    return found[0] if found else None

@@ -12,6 +12,9 @@ and the limit, before it can cost minutes or gigabytes:
   7.9 GB, so 32 leaves room above the largest chain measured and refuses the
   files that would not finish;
 * :data:`MAX_WAYPOINTS`: rows of a waypoint file or of a ``[[tasks]]`` entry;
+* :data:`MAX_SAMPLES`: samples of one time grid (a sampled trajectory, the control
+  instants of a closed-loop run), so that a long duration (``--segment-time 1e9``)
+  is refused before it allocates arrays of that length;
 * ``MAX_FMU_*``: an FMU archive (:mod:`fmu.archive` checks them before anything
   is extracted).
 
@@ -34,11 +37,13 @@ __all__ = [
     "MAX_FILE_BYTES",
     "MAX_JOINTS",
     "MAX_WAYPOINTS",
+    "MAX_SAMPLES",
     "MAX_FMU_MEMBERS",
     "MAX_FMU_MEMBER_BYTES",
     "MAX_FMU_TOTAL_BYTES",
     "MAX_FMU_RATIO",
     "FMU_RATIO_FLOOR_BYTES",
+    "check_file",
     "read_bounded",
     "load_toml",
 ]
@@ -49,6 +54,9 @@ MAX_FILE_BYTES = 10 * 1024 * 1024
 MAX_JOINTS = 32
 #: Most waypoints of a waypoint file or a ``[[tasks]]`` entry.
 MAX_WAYPOINTS = 100_000
+#: Most samples of one time grid: 5 million instants are 83 min at 1 kHz; a closed-loop run keeps about
+#: six (n,) float arrays per instant (q, qd, tau and the reference), 1.7 GB for 7 joints at this limit.
+MAX_SAMPLES = 5_000_000
 #: Most members (files and folders) of an FMU archive (an exported FMU has about 15).
 MAX_FMU_MEMBERS = 1000
 #: Largest uncompressed member of an FMU archive, bytes (256 MiB).
@@ -60,6 +68,22 @@ MAX_FMU_TOTAL_BYTES = 512 * 1024 * 1024
 MAX_FMU_RATIO = 100
 #: Members at most this large (1 MiB) are not held to :data:`MAX_FMU_RATIO`: they cannot hurt.
 FMU_RATIO_FLOOR_BYTES = 1024 * 1024
+
+
+def check_file(path: str | Path, what: str, error: type[ValueError]) -> Path:
+    """``path`` if it is a file; else ``error`` saying it does not exist or is a directory, naming it.
+
+    Raises
+    ------
+    error
+        ``"<path>: no such <what>"`` or ``"<path>: is a directory: expected a <what>"``.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise error(f"{path}: is a directory: expected a {what}")
+    if not path.exists():
+        raise error(f"{path}: no such {what}")
+    return path
 
 
 def read_bounded(path: str | Path, what: str, error: type[ValueError], limit: int = MAX_FILE_BYTES) -> bytes:
@@ -79,9 +103,10 @@ def read_bounded(path: str | Path, what: str, error: type[ValueError], limit: in
     Raises
     ------
     error
-        ``"<path>: <size> bytes: larger than the <what> size limit of <limit> bytes"``, or the file cannot be read.
+        ``"<path>: <size> bytes: larger than the <what> size limit of <limit> bytes"``, the file is missing or a
+        directory (:func:`check_file`), or it cannot be read.
     """
-    path = Path(path)
+    path = check_file(path, what, error)
     try:
         size = path.stat().st_size
         if size > limit:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,8 +36,8 @@ import numpy as np
 import numpy.typing as npt
 
 from .description import InertiaConsistencyWarning, RobotDescription
-from .errors import InputError
-from .limits import MAX_WAYPOINTS, load_toml, read_bounded
+from .errors import InputError, closest
+from .limits import MAX_WAYPOINTS, check_file, load_toml, read_bounded
 from .loading import load_description
 from .trajectory import Trajectory, via_points
 
@@ -279,9 +280,11 @@ _TOML_KEYS = ("waypoints", "segment_time", "description", "labels")
 
 def _read_toml(path: Path) -> dict[str, Any]:
     data = load_toml(path, "waypoint file", WaypointError)
-    for key in data:
+    for key in data:  # an unknown key first: it is often the misspelt 'waypoints'
         if key not in _TOML_KEYS:
-            raise WaypointError(f"{path}: unknown key {key!r}; expected one of {', '.join(_TOML_KEYS)}")
+            guess = closest(key, [k for k in _TOML_KEYS if k not in data])
+            hint = f"; did you mean {guess!r}?" if guess is not None else ""
+            raise WaypointError(f"{path}: unknown key {key!r}; expected one of {', '.join(_TOML_KEYS)}{hint}")
     if "waypoints" not in data:
         raise WaypointError(f"{path}: missing key 'waypoints' (a list of joint vectors)")
     rows = data["waypoints"]
@@ -296,9 +299,12 @@ def _read_csv(path: Path) -> list[list[Any]]:
         text = read_bounded(path, "waypoint file", WaypointError).decode("utf-8")
     except UnicodeDecodeError as exc:
         raise WaypointError(f"{path}: not UTF-8 text (byte {exc.start}): expected a CSV file of numbers") from None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if len(lines) > MAX_WAYPOINTS + 1:  # + 1: a header line; counted before any row is parsed
-        raise WaypointError(f"{path}: {len(lines)} lines: more than the waypoint limit of {MAX_WAYPOINTS}")
+    numbered = [(k, ln) for k, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(numbered) > MAX_WAYPOINTS + 1:  # + 1: a header line; counted before any row is parsed
+        raise WaypointError(f"{path}: {len(numbered)} lines: more than the waypoint limit of {MAX_WAYPOINTS}")
+    for lineno, line in numbered:
+        _check_delimiter(path, lineno, line)
+    lines = [ln for _, ln in numbered]
     for i, fields in enumerate(csv.reader(lines)):
         cells = [c.strip() for c in fields]
         parsed: list[Any] = []
@@ -307,10 +313,41 @@ def _read_csv(path: Path) -> list[list[Any]]:
                 parsed.append(float(c))
             except ValueError:
                 parsed.append(c)
-        if i == 0 and all(isinstance(c, str) for c in parsed):
+        if i == 0 and all(isinstance(c, str) and _HEADER_CELL.match(c) for c in parsed):
             continue  # header line of joint names
         rows.append(parsed)
     return rows
+
+
+#: A header cell of a waypoint CSV: a joint name, starting with a letter or ``_`` (``q1``, ``shoulder``).
+_HEADER_CELL = re.compile(r"[A-Za-z_]")
+
+
+def _check_delimiter(path: Path, lineno: int, line: str) -> None:
+    """Refuse a line whose values are separated by ``;``, tabs or spaces: a waypoint CSV is comma-separated.
+
+    Such a file (a spreadsheet's export in a locale with decimal commas) is refused rather than
+    guessed at: ``0,5;1,2`` could be two numbers or four, and reading it either way unasked
+    would move the robot somewhere its author did not write.
+    """
+    for sep, name in ((";", "';' (semicolons)"), ("\t", "tabs")):
+        if sep in line and (sep == ";" or "," not in line):
+            break
+    else:
+        words = line.split()
+        if "," in line or len(words) < 2 or not all(_is_number(word) for word in words):
+            return
+        name = "spaces"
+    raise WaypointError(f"{path} line {lineno}: values separated by {name}: expected comma-separated values "
+                        "(',' between values, '.' as the decimal point), e.g. 0.0, 0.5, -1.2")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def load_waypoints(path: str | Path, robot: str | Path | RobotDescription = "scara",
@@ -339,11 +376,9 @@ def load_waypoints(path: str | Path, robot: str | Path | RobotDescription = "sca
         Naming the file, the row and the joint: wrong joint count, not a number,
         NaN/inf, outside qlim; bad TOML; an unknown file type; a file above
         :data:`model.limits.MAX_FILE_BYTES` or with more than :data:`model.limits.MAX_WAYPOINTS` rows.
-        Also when ``path`` does not exist.
+        Also when ``path`` does not exist or is a directory.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise WaypointError(f"{p}: no such waypoint file")
+    p = check_file(path, "waypoint file", WaypointError)
     suffix = p.suffix.lower()
     file_time: Any = None
     description = f"waypoints from {p.name}"

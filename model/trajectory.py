@@ -35,6 +35,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .errors import InputError
+from .limits import MAX_SAMPLES
+
 __all__ = [
     "Trajectory",
     "JointPath",
@@ -42,6 +45,7 @@ __all__ = [
     "CartesianPath",
     "StraightLine",
     "time_grid",
+    "SampleLimitError",
     "jtraj",
     "trapezoidal",
     "via_points",
@@ -55,6 +59,10 @@ Array = npt.NDArray[np.float64]
 _GRID_RTOL = 1e-9
 #: Tolerances for accepting a homogeneous transform (orthonormality, bottom row).
 _POSE_TOL = 1e-9
+
+
+class SampleLimitError(InputError):
+    """A time grid would hold more than :data:`model.limits.MAX_SAMPLES` samples."""
 
 
 # --------------------------------------------------------------------------- validation
@@ -121,11 +129,16 @@ def time_grid(T: float, dt: float, t0: float = 0.0) -> Array:
     ------
     ValueError
         If a value is not finite or not positive, or T is not a multiple of dt.
+    SampleLimitError
+        If the grid would hold more than :data:`model.limits.MAX_SAMPLES` samples (checked before any is made).
     """
     T = _scalar(T, "T", positive=True)
     dt = _scalar(dt, "dt", positive=True)
     t0 = _scalar(t0, "t0")
     steps = T / dt
+    if steps + 1 > MAX_SAMPLES:
+        raise SampleLimitError(f"T = {T:g} s sampled every {dt:g} s: {steps + 1:.4g} samples, more than the sample "
+                               f"limit of {MAX_SAMPLES}")
     m = round(steps)
     if m < 1 or abs(steps - m) > _GRID_RTOL * max(1.0, steps):
         raise ValueError(f"dt: T = {T!r} s is not an integer multiple of dt = {dt!r} s (T/dt = {steps!r})")

@@ -31,7 +31,7 @@ from xml.etree.ElementTree import ParseError
 
 import numpy as np
 
-from .description import RobotDescription, RobotDescriptionError, _link, _Where, description_from_dict
+from .description import RobotDescription, RobotDescriptionError, _check_keys, _description, _link, _Where
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
 from .limits import read_bounded
@@ -215,7 +215,9 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
     RobotDescriptionError
         Naming the joint or link: duplicate names, a link with two parents (a closed chain), no single
         root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, too many
-        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``.
+        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``
+        (the first of these stops the reading); then every bad origin, axis, limit, dynamics or
+        inertial of the chain's joints and bodies, all in one error (its ``problems``).
     """
     path = Path(path)
     links = {}
@@ -277,18 +279,32 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
             raise RobotDescriptionError(f"{path}, joint {joint.name!r}: a mimic joint (it follows {joint.mimic.joint!r}) "
                                         "cannot be a joint of the serial model")
 
+    # The tree's shape is settled; the values of its joints and links (origins, axes, limits, inertials)
+    # are independent of each other: every bad one is collected, then raised together.
+    problems: list[str] = []
+
+    def checked(check: Any, default: Any, *args: Any) -> Any:
+        try:
+            return check(*args)
+        except RobotDescriptionError as exc:
+            problems.extend(exc.problems)
+            return default
+
+    def origin(joint: Any) -> np.ndarray:
+        return checked(_origin, np.eye(4), path, f"joint {joint.name!r}", joint.origin)
+
     def hanging(link_name: str, T: np.ndarray) -> list[tuple[float, np.ndarray, np.ndarray]]:
         """The bodies of ``link_name`` and of everything off the chain below it, in the frame where it sits at T."""
         out = []
         stack = [(link_name, T)]
         while stack:
             current, T_cur = stack.pop()
-            m, c, I = _body(path, links[current])
+            m, c, I = checked(_body, (0.0, np.zeros(3), np.zeros((3, 3))), path, links[current])
             R = T_cur[:3, :3]
             out.append((m, R @ c + T_cur[:3, 3], R @ I @ R.T))
             for joint in children[current]:
                 if joint.name not in on_chain:
-                    stack.append((joint.child, T_cur @ _origin(path, f"joint {joint.name!r}", joint.origin)))
+                    stack.append((joint.child, T_cur @ origin(joint)))
         return out
 
     chain: list[ChainJoint] = []
@@ -301,7 +317,7 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
             chain.append(ChainJoint(**spec, **dict(zip(("mass", "com", "inertia"), _lump(bodies)))))
 
     for joint in path_joints:
-        T = pending @ _origin(path, f"joint {joint.name!r}", joint.origin)
+        T = pending @ origin(joint)
         if joint.type == "fixed":
             pending = T
             if spec is not None:
@@ -309,10 +325,14 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
             continue
         close_link()
         spec = dict(name=joint.name, joint="prismatic" if joint.type == "prismatic" else "revolute", origin=T,
-                    axis=_unit_axis(path, joint), qlim=_limit(path, joint), ignored_dynamics=_ignored_dynamics(path, joint))
+                    axis=checked(_unit_axis, np.array([0.0, 0.0, 1.0]), path, joint),
+                    qlim=checked(_limit, None, path, joint),
+                    ignored_dynamics=checked(_ignored_dynamics, False, path, joint))
         pending = np.eye(4)
         bodies = hanging(joint.child, np.eye(4))
     close_link()
+    if problems:
+        raise RobotDescriptionError.collected(problems, str(path))
     if not chain:
         raise RobotDescriptionError(f"{path}: no moving joint between {base!r} and {tip_link!r}: expected at least one")
     # descendants of the tip that hang below it were collected by hanging(); the tip pose is what is pending
@@ -334,8 +354,8 @@ def _subtree(base: str, children: Mapping[str, list[Any]]) -> list[str]:
 class _JointWhere(_Where):
     """Error messages that name the URDF joint (``[joints.NAME]``) instead of a link number."""
 
-    def __init__(self, path: str, names: Sequence[str]) -> None:
-        super().__init__(path)
+    def __init__(self, path: str, names: Sequence[str], problems: list[str] | None = None) -> None:
+        super().__init__(path, problems)
         self.names = names
 
     def fail(self, link: int | None, fieldname: str, value: Any, expected: str) -> RobotDescriptionError:
@@ -371,35 +391,52 @@ def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None 
     """
     urdf_path = Path(urdf_path)
     where = str(path if path is not None else urdf_path)
-    data = dict(data or {})
     w = _Where(where)
-    for key in data:
-        if key not in _TOML_KEYS:
-            raise w.fail(None, key, data[key], f"one of the known keys of a URDF robot file ({', '.join(_TOML_KEYS)}); "
-                                               "this key is unknown")
+    desc = None
+    try:
+        desc = _urdf_description(w, urdf_path, dict(data or {}))
+    except RobotDescriptionError as exc:  # the URDF or its chain is unusable: nothing further to check
+        w.problems.extend(exc.problems)
+    w.raise_problems()
+    assert desc is not None
+    return desc
+
+
+def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> RobotDescription | None:
+    """:func:`description_from_urdf` with every independent problem recorded in ``w``; None when there is any.
+
+    Raises at once when the URDF cannot be read or its chain cannot be formed (nothing further to check).
+    """
+    _check_keys(w, None, data, (), _TOML_KEYS, what="one of the known keys of a URDF robot file")
+    ends: dict[str, str | None] = {}
     for key in ("base_link", "tip_link"):
-        if key in data and not isinstance(data[key], str):
-            raise w.fail(None, key, data[key], "a URDF link name (a string)")
+        ends[key] = data.get(key) if isinstance(data.get(key), str) else None
+        if key in data and ends[key] is None:
+            w.problems.append(str(w.fail(None, key, data[key], "a URDF link name (a string)")))
     robot = read_urdf(urdf_path)
-    chain = serial_chain(robot, urdf_path, data.get("base_link"), data.get("tip_link"))
+    chain = serial_chain(robot, urdf_path, ends["base_link"], ends["tip_link"])
     names = [j.name for j in chain.joints]
     motors = data.get("joints", {})
     if not isinstance(motors, Mapping):
-        raise w.fail(None, "joints", motors, "a table of [joints.NAME] tables")
+        w.problems.append(str(w.fail(None, "joints", motors, "a table of [joints.NAME] tables")))
+        motors = {}
+    good_motors: dict[str, Mapping[str, Any]] = {}
     for name, table in motors.items():
         if name not in names:
-            raise w.fail(None, f"joints.{name}", table, f"a moving joint of the chain ({', '.join(names)}); "
-                                                          f"{name!r} is not one")
-        if not isinstance(table, Mapping):
-            raise w.fail(None, f"joints.{name}", table, "a table of motor data")
-        for key in table:
-            if key not in MOTOR_KEYS:
-                raise w.fail(None, f"joints.{name}.{key}", table[key], f"one of the motor keys ({', '.join(MOTOR_KEYS)})")
+            w.problems.append(str(w.fail(None, f"joints.{name}", table, f"a moving joint of the chain ({', '.join(names)}); "
+                                                                         f"{name!r} is not one")))
+        elif not isinstance(table, Mapping):
+            w.problems.append(str(w.fail(None, f"joints.{name}", table, "a table of motor data")))
+        else:
+            start = len(w.problems)
+            _check_keys(w, None, table, (), MOTOR_KEYS, prefix=f"joints.{name}.", what="one of the motor keys")
+            if len(w.problems) == start:
+                good_motors[name] = table
     silent = [j.name for j in chain.joints if j.ignored_dynamics and j.name not in motors]
     if silent:
         warnings.warn(f"{urdf_path}: <dynamics damping friction> of joint(s) {', '.join(silent)} ignored: friction "
-                      "comes from [joints.NAME] in a robot TOML file", URDFDynamicsIgnoredWarning, stacklevel=3)
-    jw = _JointWhere(where, names)
+                      "comes from [joints.NAME] in a robot TOML file", URDFDynamicsIgnoredWarning, stacklevel=4)
+    jw = _JointWhere(w.path, names, w.problems)
     links = []
     for i, cj in enumerate(chain.joints):
         ixx, iyy, izz, ixy, iyz, ixz = (cj.inertia[0, 0], cj.inertia[1, 1], cj.inertia[2, 2], cj.inertia[0, 1],
@@ -407,20 +444,23 @@ def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None 
         fields: dict[str, Any] = {
             "joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0, "name": cj.name,
             "mass": cj.mass, "com": [float(v) for v in cj.com], "inertia": [float(v) for v in (ixx, iyy, izz, ixy, iyz, ixz)],
-            **motors.get(cj.name, {}),
+            **good_motors.get(cj.name, {}),
         }
         if cj.qlim is not None:
             fields["qlim"] = list(cj.qlim)
         link = _link(jw, i, fields)
-        links.append(dataclasses.replace(link, origin=tuple(float(v) for v in cj.origin.ravel()),
-                                         axis=tuple(float(v) for v in cj.axis)))
+        if link is not None:
+            links.append(dataclasses.replace(link, origin=tuple(float(v) for v in cj.origin.ravel()),
+                                             axis=tuple(float(v) for v in cj.axis)))
     # Top-level keys (gravity, rest, tool, tasks, ...) are checked by the TOML reader on a DH skeleton of
     # the same joints; its links are then replaced by the URDF ones.
     skeleton = {key: data[key] for key in _PASSED_ON if key in data}
     skeleton.setdefault("name", chain.robot_name)
-    skeleton["links"] = [{"joint": lk.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
-                          **({"qlim": list(lk.qlim)} if lk.qlim is not None else {})} for lk in links]
-    desc = description_from_dict(skeleton, where)
+    skeleton["links"] = [{"joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
+                          **({"qlim": list(cj.qlim)} if cj.qlim is not None else {})} for cj in chain.joints]
+    desc = _description(w, skeleton, w.path)
+    if desc is None or w.problems:
+        return None
     return dataclasses.replace(desc, links=tuple(links), convention="urdf", tip=_pose16(chain.tip))
 
 
@@ -431,5 +471,6 @@ def description_from_urdf_toml(data: Mapping[str, Any], path: str | Path) -> Rob
         raise _Where(str(path)).fail(None, "urdf", urdf, "the path of a URDF file, relative to this file")
     urdf_path = Path(path).resolve().parent / urdf
     if not urdf_path.is_file():
-        raise _Where(str(path)).fail(None, "urdf", urdf, f"the path of a URDF file relative to this file; {urdf_path} does not exist")
+        state = "is a directory" if urdf_path.is_dir() else "does not exist"
+        raise _Where(str(path)).fail(None, "urdf", urdf, f"the path of a URDF file relative to this file; {urdf_path} {state}")
     return description_from_urdf(urdf_path, {k: v for k, v in data.items() if k != "urdf"}, path)

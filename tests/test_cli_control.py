@@ -75,14 +75,14 @@ def outside_limits(tmp_path):
 
 @pytest.mark.parametrize("argv, message", [
     (["design", "scara", "--controller", "lqr"], "manip design: error: --controller: expected one of pd, pd-g, pid, pd-ff, ct, got 'lqr'"),
-    (["design", "scara", "--bandwidth=-5"], "manip design: error: bandwidth: expected a positive number of rad/s, got -5.0"),
+    (["design", "scara", "--bandwidth=-5"], "manip design: error: --bandwidth: expected a positive number of rad/s, got -5.0"),
     (["design", "scara", "--bandwidth", "100", "--rate", "100"],
-     "manip design: error: rate: 100 Hz is too low for a bandwidth of 100 rad/s (15.9 Hz): expected >= 10 x bandwidth in Hz = 159.2 Hz"),
-    (["track", "scara", "--rate", "50"], "manip track: error: rate: 50 Hz is too low for a bandwidth of 50 rad/s"),
+     "manip design: error: --rate: 100 Hz is too low for a bandwidth of 100 rad/s (15.9 Hz): expected >= 10 x bandwidth in Hz = 159.2 Hz"),
+    (["track", "scara", "--rate", "50"], "manip track: error: --rate: 50 Hz is too low for a bandwidth of 50 rad/s"),
     (["track", "scara", "--controller", "pid", "--waypoints", "FAR"], "row 2, joint 3: 5 m outside qlim [0, 3.5]"),
     (["track", "scara", "--payload=-1"], "manip track: error: --payload: expected a mass >= 0 kg, got -1.0"),
     (["track", "nosuchrobot"], "manip track: error: robot 'nosuchrobot': expected a built-in name"),
-    (["design", "scara", "--damping", "0"], "manip design: error: damping: expected a damping ratio in [0.05, 5], got 0.0"),
+    (["design", "scara", "--damping", "0"], "manip design: error: --damping: expected a damping ratio in [0.05, 5], got 0.0"),
 ])
 def test_bad_input_is_one_line_and_exit_status_2(tmp_path, capsys, outside_limits, argv, message):
     argv = [str(outside_limits) if a == "FAR" else a for a in argv] + ["--out", str(tmp_path / "out")]

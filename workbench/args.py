@@ -10,11 +10,34 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 
 from model.errors import InputError
 
-__all__ = ["UsageError", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
-           "positive_float"]
+__all__ = ["UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
+           "in_flag_terms", "positive_float"]
+
+#: The library's parameter names that its error messages start with (``"link_mass_scale: expected ..."``)
+#: and the flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
+FLAG_OF: dict[str, str] = {
+    "bandwidth": "--bandwidth",
+    "damping": "--damping",
+    "phase_margin": "--phase-margin",
+    "rate": "--rate",
+    "rate_hz": "--rate",
+    "controller": "--controller",
+    "kind": "--controller",
+    "link_mass_scale": "--mass-scale",
+    "friction_scale": "--friction-scale",
+    "payload": "--payload",
+    "payload_mass": "--payload",
+    "segment_time": "--segment-time",
+    "t_final": "the task's duration (--segment-time)",
+    "t_end": "--horizon",
+    "step": "--step",
+    "motor_model": "--motor-model",
+}
+_LEADING_NAME = re.compile(r"^([A-Za-z_]\w*):")
 
 class UsageError(InputError):
     """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
@@ -28,6 +51,22 @@ def controller_kind(value: str) -> str:
     if value not in CONTROLLER_KINDS:
         raise UnknownControllerError(f"--controller: expected one of {', '.join(CONTROLLER_KINDS)}, got {value!r}")
     return value
+
+
+def in_flag_terms(message: str, args: argparse.Namespace) -> str:
+    """``message`` with a leading library parameter name (:data:`FLAG_OF`) replaced by the flag of the command.
+
+    Only a flag that the running command has is put in (``args`` holds its options), so
+    ``"t_end: ..."`` from ``manip validate-fmu`` reads ``"--horizon: ..."`` and a name no flag sets stays.
+    """
+    match = _LEADING_NAME.match(message)
+    if match is None or match.group(1) not in FLAG_OF:
+        return message
+    flag = FLAG_OF[match.group(1)]
+    option = re.search(r"--([\w-]+)", flag)
+    if option is None or not hasattr(args, option.group(1).replace("-", "_")):
+        return message
+    return flag + message[match.end(1):]
 
 
 def finite_or_fail(value: float | None, flag: str, positive: bool = True) -> None:

@@ -3,8 +3,10 @@
 The sub-commands live in ``workbench/cmd_*.py`` (``register(subparsers)`` each);
 this module assembles them and owns the outcome: an expected error
 (:class:`model.errors.WorkbenchError`) is printed as one line with exit status
-2, Ctrl-C as one line with exit status 130; anything else is a bug and keeps
-its traceback.
+2 (an input error with several problems as a count line and one line per
+problem), a library parameter name at its start replaced by the flag the user
+typed (:data:`workbench.args.FLAG_OF`); Ctrl-C as one line with exit status
+130; anything else is a bug and keeps its traceback.
 """
 
 from __future__ import annotations
@@ -15,19 +17,22 @@ import warnings
 from importlib.metadata import PackageNotFoundError, version
 from typing import Sequence
 
-from model.errors import WorkbenchError
+from model.errors import InputError, WorkbenchError
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_track
 from . import cmd_teach, cmd_workspace  # teach page and workspace figure
-from .args import UsageError, add_no_plots
+from .args import UsageError, add_no_plots, in_flag_terms
 from .outputs import check_out_dir
 
-__all__ = ["main", "build_parser", "one_line", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED"]
+__all__ = ["main", "build_parser", "one_line", "error_lines", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED",
+           "MAX_PROBLEM_LINES"]
 
 #: Exit status of an expected error (bad input, failed build): argparse's own.
 EXIT_USAGE = 2
 #: Exit status after Ctrl-C (128 + SIGINT), as a shell reports it.
 EXIT_INTERRUPTED = 130
+#: Most problems of one error printed, one line each (a robot file of 32 links can hold hundreds).
+MAX_PROBLEM_LINES = 50
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -89,6 +94,23 @@ def one_line(exc: BaseException, limit: int = 400) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def error_lines(exc: WorkbenchError) -> list[str]:
+    """The lines an expected error prints: :func:`one_line` of it, or with several problems
+    (:attr:`model.errors.InputError.problems`) a count line and one complete line per problem."""
+    if not isinstance(exc, InputError):
+        return [one_line(exc)]
+    # an input error is one line per problem, each a whole message: a longer limit keeps the list of
+    # known keys and the "did you mean" after it (the default limit is for compiler output)
+    problems, limit = exc.problems, 1000
+    if len(problems) == 1:
+        return [one_line(exc, limit)]
+    lines = [one_line(Exception(str(exc).splitlines()[0]), limit)]
+    lines += [one_line(Exception(p), limit) for p in problems[:MAX_PROBLEM_LINES]]
+    if len(problems) > MAX_PROBLEM_LINES:
+        lines.append(f"... and {len(problems) - MAX_PROBLEM_LINES} more problems")
+    return lines
+
+
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"manip: warning: {message}\n"
 
@@ -103,7 +125,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except WorkbenchError as exc:
-        print(f"manip {args.command}: error: {one_line(exc)}", file=sys.stderr)
+        for line in error_lines(exc):
+            print(f"manip {args.command}: error: {in_flag_terms(line, args)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"manip {args.command}: interrupted", file=sys.stderr)

@@ -117,13 +117,11 @@ def _vector(values: Sequence[float]) -> str:
 
 
 def _urdf_origin(lk: LinkDescription) -> tuple[np.ndarray, np.ndarray]:
-    """The joint origin of a URDF link: xyz (m) and rpy (deg), ``R = Rz(y) Ry(p) Rx(r)``."""
-    from scipy.spatial.transform import Rotation  # only for URDF robots: keeps `manip info` light
-
-    from model.description import pose_matrix
+    """The joint origin of a URDF link: xyz (m) and rpy (deg), ``R = Rz(y) Ry(p) Rx(r)``; yaw = 0 at gimbal lock."""
+    from model.description import pose_matrix, tr2rpy
 
     T = pose_matrix(lk.origin)
-    return T[:3, 3], Rotation.from_matrix(T[:3, :3]).as_euler("xyz") * (180.0 / np.pi)
+    return T[:3, 3], tr2rpy(T) * (180.0 / np.pi)
 
 
 def format_info(desc: RobotDescription) -> str:
