@@ -180,3 +180,13 @@ def test_ctrl_c_exits_130_and_leaves_no_partial_file(tmp_path, argv):
         json.loads(path.read_text())  # complete, or it would not parse
     for path in out.rglob("*.png"):
         assert path.read_bytes().endswith(b"IEND\xaeB`\x82")  # a PNG ends with its IEND chunk
+
+
+def test_a_reader_that_leaves_early_is_no_traceback():
+    """``manip info ur5 | head -1``: the pipe closes under the command; it stops quietly with 128 + SIGPIPE."""
+    proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", "info", "ur5"], cwd=REPO,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader leaves at once, long before the command (0.3 s of imports) writes
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141, err
+    assert "Traceback" not in err

@@ -366,9 +366,9 @@ def test_manip_info_of_a_urdf_robot_at_gimbal_lock_warns_nothing(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "workbench.cli", "info", str(tmp_path / "lock.urdf")], cwd=ROOT,
                           env=env, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0 and proc.stderr == "", proc.stderr
-    row = next(line for line in proc.stdout.splitlines() if line.split()[:2] == ["1", "revolute"])
-    # rpy (0.3, pi/2, 0.2) is at the lock: roll - yaw = 0.1 rad = 5.73 deg, yaw 0
-    assert "[5.73, 90.00, 0.00]" in row, row
+    row = next(line for line in proc.stdout.splitlines() if line.split()[:3] == ["1", "j1", "revolute"])
+    # rpy (0.3, pi/2, 0.2) is at the lock: roll - yaw = 0.1 rad = 5.72958 deg, yaw 0
+    assert "[5.72958, 90, 0]" in row, row
 
 
 def test_a_long_unknown_key_message_keeps_its_suggestion_on_the_cli_line(tmp_path):

@@ -12,6 +12,7 @@ typed (:data:`workbench.args.FLAG_OF`); Ctrl-C as one line with exit status
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import warnings
 from importlib.metadata import PackageNotFoundError, version
@@ -24,13 +25,15 @@ from . import cmd_teach, cmd_workspace  # teach page and workspace figure
 from .args import UsageError, add_no_plots, in_flag_terms
 from .outputs import check_out_dir
 
-__all__ = ["main", "build_parser", "one_line", "error_lines", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED",
+__all__ = ["main", "build_parser", "one_line", "error_lines", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED", "EXIT_BROKEN_PIPE",
            "MAX_PROBLEM_LINES"]
 
 #: Exit status of an expected error (bad input, failed build): argparse's own.
 EXIT_USAGE = 2
 #: Exit status after Ctrl-C (128 + SIGINT), as a shell reports it.
 EXIT_INTERRUPTED = 130
+#: Exit status when the reader of stdout went away (128 + SIGPIPE), as a shell reports it.
+EXIT_BROKEN_PIPE = 141
 #: Most problems of one error printed, one line each (a robot file of 32 links can hold hundreds).
 MAX_PROBLEM_LINES = 50
 
@@ -131,6 +134,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"manip {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # `manip info ur5 | head`: the reader left; stop quietly, as other Unix tools do
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python's final flush of stdout must not raise again
+        return EXIT_BROKEN_PIPE
     finally:
         warnings.formatwarning = previous
 
