@@ -42,7 +42,7 @@ import numpy as np
 
 from model.files import atomic_path, write_atomic
 
-from .sweep_spec import SweepSpec, case_values
+from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
            "rerun_case", "run_cases", "summarise", "sweep"]
@@ -232,8 +232,6 @@ def _prepare_parts(spec: SweepSpec, out: Path, resume: bool) -> tuple[Path, dict
         except (OSError, ValueError, KeyError):
             recorded = None
         if recorded != spec.digest():
-            from .sweep_spec import SweepSpecError
-
             raise SweepSpecError(f"{spec.source}: --resume: {parts} holds the cases of another spec; "
                                  f"remove it or run without --resume")
         return parts, _read_parts(parts)
@@ -295,7 +293,7 @@ def summarise(spec: SweepSpec, table: Any, units: tuple[str, ...], bound: float 
     out: dict[str, Any] = {
         "robot": spec.robot, "controller": spec.controller, "cases": int(len(table)), "method": spec.method,
         "seed": spec.seed, "varied": {q: list(r) for q, r in spec.vary.items()},
-        "max_error_unit": units[0] if len(set(units)) == 1 else "per joint (" + ", ".join(units) + ")",
+        "max_error_unit": units[0] if len(set(units)) == 1 else " or ".join(sorted(set(units))),
         "diverged": int(table["diverged"].sum()),
         "max_error_quantiles": {f"{q:g}": float(np.quantile(finite, q)) if finite.size else None for q in qs},
         "max_error_mean": float(finite.mean()) if finite.size else None,
@@ -346,6 +344,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
     stream = stream if stream is not None else sys.stderr
     setup = case_setup(spec)  # builds (or loads) the kernel here, once, before any worker needs it
     robot = setup.robot
+    check_joints(spec, robot.n)
     joints = tuple(lk.name or f"joint{i + 1}" for i, lk in enumerate(robot.description.links))
     units = tuple("rad" if lk.is_revolute else "m" for lk in robot.description.links)
     # a case that cannot be set up (e.g. a rate too slow for a bandwidth) fails here, before the cluster starts

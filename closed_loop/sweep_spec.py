@@ -18,6 +18,8 @@ A spec is a TOML file (or the same keys as a dict)::
     [vary]                          # each quantity: [low, high], uniform
     payload_mass = [0.0, 3.0]
 
+Relative ``robot`` (a ``.toml``/``.urdf`` file) and ``waypoints`` paths are read from the spec's folder.
+
 The varied quantities (:data:`QUANTITIES`): ``payload_mass`` (kg), ``payload_com_x``,
 ``_y``, ``_z`` (m, last link frame), ``friction_scale`` (every joint's viscous and
 Coulomb friction times this) or ``friction_scale_J`` (joint J only, 1-based),
@@ -38,7 +40,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -47,7 +49,8 @@ import numpy as np
 from model.errors import InputError
 from model.limits import MAX_SPEC_BYTES, MAX_SWEEP_CASES, load_toml
 
-__all__ = ["METHODS", "QUANTITIES", "SweepSpec", "SweepSpecError", "case_values", "load_spec", "spec_from_dict"]
+__all__ = ["METHODS", "QUANTITIES", "SweepSpec", "SweepSpecError", "case_values", "check_joints", "load_spec",
+           "spec_from_dict"]
 
 #: Sampling methods.
 METHODS: tuple[str, ...] = ("grid", "random", "sobol")
@@ -99,7 +102,9 @@ class SweepSpec:
 
     @property
     def quantities(self) -> tuple[str, ...]:
-        """The varied quantities, in column order."""
+        """Relative ``robot`` (a ``.toml``/``.urdf`` file) and ``waypoints`` paths are read from the spec's folder.
+
+The varied quantities, in column order."""
         return tuple(self.vary)
 
     @property
@@ -238,11 +243,19 @@ def load_spec(path: str | Path, n_joints: int | None = None) -> SweepSpec:
     path = Path(path)
     data = load_toml(path, "sweep spec", SweepSpecError, MAX_SPEC_BYTES)
     spec = spec_from_dict(data, str(path), n_joints)
+    changes = {}
     if spec.waypoints is not None and not Path(spec.waypoints).is_absolute():
-        from dataclasses import replace
+        changes["waypoints"] = str(path.parent / spec.waypoints)
+    if spec.robot.endswith((".toml", ".urdf")) and not Path(spec.robot).is_absolute():
+        changes["robot"] = str(path.parent / spec.robot)
+    return replace(spec, **changes) if changes else spec
 
-        spec = replace(spec, waypoints=str(path.parent / spec.waypoints))
-    return spec
+
+def check_joints(spec: SweepSpec, n_joints: int) -> None:
+    """Refuse a ``friction_scale_J`` beyond the robot's ``n_joints`` (:class:`SweepSpecError`)."""
+    for q in spec.vary:
+        if q.startswith("friction_scale_") and int(q[len("friction_scale_"):]) > n_joints:
+            raise SweepSpecError(f"{spec.source}: vary.{q}: the robot {spec.robot!r} has {n_joints} joints")
 
 
 def case_values(spec: SweepSpec, cases: np.ndarray | None = None) -> np.ndarray:

@@ -17,7 +17,7 @@ from typing import Sequence
 
 from model.errors import WorkbenchError
 
-from . import cmd_design, cmd_fmu, cmd_model, cmd_track
+from . import cmd_design, cmd_fmu, cmd_model, cmd_sweep, cmd_track
 from .args import UsageError
 from .outputs import check_out_dir
 
@@ -59,6 +59,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     cmd_design.register(sub, full=only in (None, "design"))
     cmd_track.register(sub, full=only in (None, "track"))
     cmd_fmu.register(sub)
+    cmd_sweep.register(sub, full=only in (None, "sweep"))
     p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")
     p.add_argument("--robot", default="scara", help="built-in name or TOML file (default scara)")
     p.add_argument("--out", default="out", help="output folder (default out/)")
