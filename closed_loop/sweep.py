@@ -124,9 +124,7 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
             setup.schedules[rate] = sched
     # The sub-steps of the Python loop for this plant; scaled links: B_s >= min(s, 1) B, so the friction
     # rate is at most 1 / min(s, 1) times that of the unscaled plant.
-    sub = default_substeps(plant, controller.dt, sched.q0)
-    if mass_scale < 1.0:
-        sub = max(sub, math.ceil(sub / mass_scale - 1e-9))
+    sub = default_substeps(plant, controller.dt, sched.q0, rate_factor=1.0 / min(mass_scale, 1.0))
     sched = dataclasses.replace(sched, substeps=sub)
     delay = bool(values.get("delay", 1.0 if spec.delay else 0.0) >= 0.5)
     return controller, sched, p, mass_scale, delay
@@ -362,6 +360,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
         todo = np.array([c for c in range(spec.n_cases) if c not in done], dtype=np.int64)
         n_workers = workers or os.cpu_count() or 1
         report = progress or SweepProgress(spec.n_cases, stream, done=len(done))
+        run_time = 0.0
         if todo.size:
             with (contextlib.nullcontext(Client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
                 try:
@@ -372,6 +371,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
                     print(f"sweep: {spec.n_cases} cases ({len(done)} already done) in {len(batches)} tasks on "
                           f"{n_workers} workers ({'scheduler ' + scheduler if scheduler else 'local cluster'})",
                           file=stream, flush=True)
+                    t_run = time.perf_counter()
                     spec_f = client.scatter(spec, broadcast=True)
                     futures = {client.submit(run_cases, spec_f, b, pure=False, retries=2): b for b in batches}
                     for fut in as_completed(futures):
@@ -382,6 +382,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
                             done[int(c)] = row
                         report(len(cases))
                         fut.release()
+                    run_time = time.perf_counter() - t_run
                 finally:
                     if scheduler:
                         client.close()
@@ -390,6 +391,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
             raise RuntimeError(f"sweep: {len(table)} of {spec.n_cases} cases finished")
         summary = summarise(spec, table, units)
         summary["wall_time_s"] = time.perf_counter() - t0
+        summary["run_time_s"] = run_time  # from the first task submitted to the last result, cluster start excluded
         summary["workers"] = n_workers
         files: list[Path] = []
         if out is not None:
