@@ -114,8 +114,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         list(pool.map(lambda b: run_cases(spec, b), batches))
         two = time.perf_counter() - t
     say(f"sweep work per case in this process: {1e3 * one / 400:.2f} ms on 1 thread, {1e3 * two / 400:.2f} ms on "
-        f"2 threads ({one / two:.2f}x: the kernel call releases the GIL, the per-case Python around it does not; "
-        f"the cluster uses processes)   {load()}")
+        f"2 threads ({one / two:.2f}x; ctypes releases the GIL only for the C call itself, the per-case Python "
+        f"around it holds it, so the cluster runs one single-threaded process per core)   {load()}")
     if args.no_sweep:
         return 0 if met else 1
 

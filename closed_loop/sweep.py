@@ -45,7 +45,7 @@ from model.files import atomic_path, write_atomic
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
-           "rerun_case", "run_cases", "summarise", "sweep"]
+           "nominal_run", "rerun_case", "run_cases", "summarise", "sweep"]
 
 #: Folder (inside the output folder) of the finished tasks of a running or interrupted sweep.
 PARTS_DIR = ".sweep-parts"
@@ -149,6 +149,13 @@ def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
     return rows
 
 
+def nominal_run(spec: SweepSpec) -> Any:
+    """The :class:`~closed_loop.kernel.KernelRun` of ``spec``'s design on the exact plant (nothing varied)."""
+    setup = case_setup(spec)
+    controller, sched, p, mass_scale, delay = _case_inputs(spec, setup, {})
+    return setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay)
+
+
 def rerun_case(spec: SweepSpec, case: int) -> Any:
     """The samples of one case (a :class:`~closed_loop.result.TrackingResult`), re-run by the compiled loop."""
     setup = case_setup(spec)
@@ -182,8 +189,8 @@ class SweepProgress:
 def local_cluster(workers: int, host: str = "127.0.0.1") -> Iterator[Any]:
     """An embedded ``LocalCluster`` of ``workers`` single-threaded processes and its client, closed on exit.
 
-    Scheduler and workers listen on ``host`` (loopback unless the caller asks otherwise) on free ports;
-    no dashboard. Closed in a ``finally``: after Ctrl-C or an error nothing is left listening.
+    Scheduler (with its HTTP endpoints), nannies and workers listen on ``host`` (loopback unless the caller
+    asks otherwise) on free ports; no dashboard. Closed in a ``finally``: after Ctrl-C or an error nothing is left listening.
     """
     import logging
 
@@ -195,8 +202,10 @@ def local_cluster(workers: int, host: str = "127.0.0.1") -> Iterator[Any]:
     cluster = None
     client = None
     try:
+        # no dashboard; the scheduler's HTTP endpoints (health, metrics) on a free port of ``host``, not 8787
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=host, scheduler_port=0,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=None, scheduler_kwargs={"dashboard_address": f"{host}:0"},
+                               silence_logs=logging.ERROR)
         client = Client(cluster)
         yield client
     finally:

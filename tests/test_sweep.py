@@ -244,3 +244,16 @@ def test_a_worker_killed_mid_sweep_loses_no_case_and_counts_none_twice(cluster, 
     rows = run_cases(spec, np.arange(120))  # the same cases, in this process
     np.testing.assert_array_equal(result.table["max_error"].to_numpy(), rows[:, 0])
     np.testing.assert_array_equal(result.table["rms_error_quill"].to_numpy(), rows[:, 2 + 4 + 2])
+
+
+def test_the_readme_spec_is_a_valid_spec():
+    import re
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+        import tomli as tomllib
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = re.search(r"```toml\n(.*?)```", readme, re.S)
+    spec = spec_from_dict(tomllib.loads(block.group(1)), "README.md")
+    assert spec.n_cases == 1000 and spec.quantities == ("payload_mass", "friction_scale", "link_mass_scale")

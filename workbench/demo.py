@@ -120,7 +120,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    progress = Progress(8 if gif else 7, stream)
+    progress = Progress(9 if gif else 8, stream)
     files: list[Path] = []
 
     progress.step(f"loading {robot_name} and building its compiled dynamics")
@@ -192,6 +192,14 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     metrics = {kind: fmu_results[kind].metrics().to_dict() for kind in fmu_results}
     write_json(out / "metrics.json", metrics)
     files.append(out / "metrics.json")
+
+    # --- sweep section (workbench/report_sweep.py): one self-contained call ---
+    progress.step("a robustness sweep: computed torque over payload x friction, compiled loops on Dask")
+    from .report_sweep import sweep_section
+
+    files += sweep_section(report, robot_name, out / "sweep", rate_hz=rate_hz, bandwidth=bandwidth, note=progress.note,
+                           rel_to=out)
+    # --- end of the sweep section ---
 
     if gif:
         progress.step("animating the arm along the closed-loop motion")
