@@ -257,3 +257,38 @@ def test_the_readme_spec_is_a_valid_spec():
     block = re.search(r"```toml\n(.*?)```", readme, re.S)
     spec = spec_from_dict(tomllib.loads(block.group(1)), "README.md")
     assert spec.n_cases == 1000 and spec.quantities == ("payload_mass", "friction_scale", "link_mass_scale")
+
+
+def test_manip_sweep_ctrl_c_exits_130_and_leaves_nothing_listening(tmp_path):
+    """Interrupted mid-sweep: exit status 130, one line, every process of its tree gone, no port left open."""
+    import psutil
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text('robot = "scara"\ncontroller = "pd"\nsamples = 400\nbatch = 2\n[vary]\npayload_mass = [0, 3]\n')
+    out, err_log = tmp_path / "out", tmp_path / "stderr.txt"
+    with open(err_log, "w") as fe:
+        proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", "sweep", str(spec), "--out", str(out),
+                                 "--workers", "2", "--no-plots"], stdout=subprocess.DEVNULL, stderr=fe, text=True)
+        root = psutil.Process(proc.pid)
+        pids, ports = {proc.pid}, set()
+        deadline = time.monotonic() + 180
+        while "cases (" not in err_log.read_text() and time.monotonic() < deadline and proc.poll() is None:
+            for pid, c in _tree_sockets(root):
+                pids.add(pid)
+                if c.status == psutil.CONN_LISTEN:
+                    ports.add(c.laddr.port)
+                    assert ipaddress.ip_address(c.laddr.ip).is_loopback, c
+            time.sleep(0.1)
+        assert proc.poll() is None, err_log.read_text()  # still sweeping
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=60)
+    err = err_log.read_text()
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1] == "manip sweep: interrupted" and "Traceback" not in err
+    assert len(pids) >= 3 and len(ports) >= 3  # the command, its scheduler and two workers were seen
+    time.sleep(1.0)
+    alive = [p for p in pids if psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE]
+    assert not alive
+    listening = {c.laddr.port for c in psutil.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN}
+    assert not (ports & listening)
+    assert (out / PARTS_DIR).is_dir() and not (out / "results.csv").exists()  # kept for --resume
