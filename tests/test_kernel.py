@@ -77,6 +77,7 @@ def test_kernel_equals_the_python_loop_for_every_controller(scara, task, kind):
 def test_kernel_with_a_one_period_delay_equals_the_delayed_python_loop(scara, task, kind):
     controller = design_robot(scara, kind, rate_hz=500.0, analyse=False).controller(500.0)
     run, ref = _run_both(scara, scara, controller, task, delay=True)
+    assert ref.substeps == 2  # 500 Hz: two RK4 sub-steps of 1 ms per period
     _compare(run, ref)
     undelayed = closed_loop_kernel(scara, kind).run(controller, Schedule.build(
         scara, task, controller.dt, t_final=T_FINAL, substeps=ref.substeps), scara.parameters)
