@@ -26,6 +26,7 @@ import ctypes
 import threading
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Mapping
 import numpy as np
 
 from control_design.controllers import LawController
@@ -120,7 +121,8 @@ class ClosedLoopKernel:
         self._state_index = self._in_names.index("z") if "z" in self._in_names else -1
 
     def run(self, controller: LawController, schedule: Schedule, plant_parameters: DynamicsParameters, *,
-            link_mass_scale: float = 1.0, delay: bool = False, record: bool = False) -> KernelRun:
+            link_mass_scale: float = 1.0, delay: bool = False, record: bool = False,
+            values: Mapping[str, Any] | None = None) -> KernelRun:
         """Run ``controller`` on the plant along ``schedule`` in one C call.
 
         Parameters
@@ -138,6 +140,9 @@ class ClosedLoopKernel:
             Torques reach the plant one period late (:class:`~closed_loop.delay.OnePeriodDelay`).
         record
             Also return the samples (:attr:`KernelRun.result`).
+        values
+            Parameter inputs of the law that replace ``controller``'s, by name (e.g. the ``Kp``, ``Kd``, ``Ki``
+            of another design at the same rate: a sweep over gains needs no new controller per case).
 
         Raises
         ------
@@ -153,7 +158,14 @@ class ClosedLoopKernel:
         if not (np.isfinite(link_mass_scale) and link_mass_scale > 0):
             raise DesignSpecError(f"link_mass_scale: expected a factor > 0, got {link_mass_scale!r}")
         p = self.robot.dynamics.check_parameters(plant_parameters).vector
-        values = controller.parameter_values()
+        own = controller.parameter_values()
+        if values:
+            unknown = [k for k in values if k not in own]
+            if unknown:
+                raise DesignSpecError(f"values: {unknown[0]!r} is not a parameter of the {self.kind!r} law "
+                                      f"(expected one of {', '.join(own)})")
+            own.update({k: np.broadcast_to(np.asarray(v, dtype=np.float64), own[k].shape) for k, v in values.items()})
+        values = own
         inputs: list[np.ndarray | None] = []
         for i, name in enumerate(self._in_names):
             if i < len(self.law.signals) or i == self._state_index:

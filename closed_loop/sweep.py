@@ -63,6 +63,7 @@ class _Setup:
     robot: Any
     trajectory: Any
     kernel: Any
+    joint_model: Any
     controllers: dict
     schedules: dict
 
@@ -79,15 +80,26 @@ def case_setup(spec: SweepSpec) -> _Setup:
 
         from .kernel import closed_loop_kernel
 
+        from control_design.joint_model import decoupled_model
+        from control_design.reference import reference_task, reference_task_name
+
         robot = load_robot(spec.robot)
         traj = task_trajectory(robot, spec.task, spec.waypoints, spec.segment_time)
-        _SETUPS[key] = _Setup(robot, traj, closed_loop_kernel(robot, spec.controller), {}, {})
+        # the design's decoupled model (design_robot's default), computed once for every design of the sweep
+        jm = decoupled_model(robot, reference_task(robot), reference_name=reference_task_name(robot))
+        _SETUPS[key] = _Setup(robot, traj, closed_loop_kernel(robot, spec.controller), jm, {}, {})
     return _SETUPS[key]
 
 
-def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tuple[Any, Any, Any, float, bool]:
-    """The controller, schedule, plant parameters, link-mass scale and delay of one case."""
+def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tuple[Any, Any, Any, float, bool, Any]:
+    """The controller, schedule, plant parameters, link-mass scale, delay and gain overrides of one case.
+
+    One controller per control rate; a case whose bandwidth or damping varies keeps it and overrides its
+    gains (``Kp``, ``Kd``, ``Ki``) with those of its own design (the other parameters of a design, its
+    limits and feed-forward, do not depend on them).
+    """
     from control_design.design import design_robot
+    from control_design.loops import gains_arrays
 
     from .schedule import Schedule, default_substeps
 
@@ -95,14 +107,21 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     rate = values.get("rate_hz", spec.rate_hz or 1000.0)
     bw = values.get("bandwidth", spec.bandwidth)
     zeta = values.get("damping", spec.damping)
-    dkey = (bw, zeta, rate)
-    controller = setup.controllers.get(dkey)
-    if controller is None:  # a design per case only when its bandwidth, damping or rate varies
-        kwargs = {} if bw is None else {"bandwidth": bw}
-        design = design_robot(robot, spec.controller, damping=zeta, rate_hz=rate, analyse=False, **kwargs)
-        controller = design.controller(rate, saturate=spec.saturate)
+
+    def design(bandwidth: float | None, damping: float | None) -> Any:
+        kwargs = {} if bandwidth is None else {"bandwidth": bandwidth}
+        return design_robot(robot, spec.controller, damping=damping, rate_hz=rate, analyse=False,
+                            joint_model=setup.joint_model, **kwargs)
+
+    controller = setup.controllers.get(rate)
+    if controller is None:
+        controller = design(spec.bandwidth, spec.damping).controller(rate, saturate=spec.saturate)
         if len(setup.controllers) < 64:
-            setup.controllers[dkey] = controller
+            setup.controllers[rate] = controller
+    gains = None
+    if bw != spec.bandwidth or zeta != spec.damping:
+        Kp, Kd, Ki = gains_arrays(design(bw, zeta).loops)
+        gains = {"Kp": Kp, "Kd": Kd, **({"Ki": Ki} if spec.controller == "pid" else {})}
     p = robot.parameters
     if "payload_mass" in values or any(q.startswith("payload_com") for q in values):
         com = [values.get(f"payload_com_{a}", 0.0) for a in "xyz"]
@@ -127,7 +146,7 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     sub = default_substeps(plant, controller.dt, sched.q0, rate_factor=1.0 / min(mass_scale, 1.0))
     sched = dataclasses.replace(sched, substeps=sub)
     delay = bool(values.get("delay", 1.0 if spec.delay else 0.0) >= 0.5)
-    return controller, sched, p, mass_scale, delay
+    return controller, sched, p, mass_scale, delay, gains
 
 
 def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
@@ -137,8 +156,8 @@ def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
     n = setup.robot.n
     rows = np.empty((len(cases), 2 + len(_METRICS) * n))
     for r, vals in enumerate(values):
-        controller, sched, p, mass_scale, delay = _case_inputs(spec, setup, dict(zip(spec.quantities, vals)))
-        run = setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay)
+        controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, dict(zip(spec.quantities, vals)))
+        run = setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, values=gains)
         per_joint = np.concatenate([run.max_error, run.rms_error, run.peak_motor_torque, run.peak_motor_velocity,
                                     run.saturated_fraction])
         if run.diverged:
@@ -152,16 +171,16 @@ def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
 def nominal_run(spec: SweepSpec) -> Any:
     """The :class:`~closed_loop.kernel.KernelRun` of ``spec``'s design on the exact plant (nothing varied)."""
     setup = case_setup(spec)
-    controller, sched, p, mass_scale, delay = _case_inputs(spec, setup, {})
-    return setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay)
+    controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, {})
+    return setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, values=gains)
 
 
 def rerun_case(spec: SweepSpec, case: int) -> Any:
     """The samples of one case (a :class:`~closed_loop.result.TrackingResult`), re-run by the compiled loop."""
     setup = case_setup(spec)
     vals = case_values(spec, np.array([case]))[0]
-    controller, sched, p, mass_scale, delay = _case_inputs(spec, setup, dict(zip(spec.quantities, vals)))
-    run = setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, record=True)
+    controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, dict(zip(spec.quantities, vals)))
+    run = setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, record=True, values=gains)
     return run.result
 
 

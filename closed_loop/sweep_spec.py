@@ -262,7 +262,8 @@ def case_values(spec: SweepSpec, cases: np.ndarray | None = None) -> np.ndarray:
     """(len(cases), d) values of the varied quantities of ``cases`` (default all, 0..N-1), in column order.
 
     ``random``: case i is ``low + (high - low) u`` with u from ``default_rng(SeedSequence([seed, i]))``;
-    ``sobol``: a scrambled Sobol' design of N points seeded by ``seed``; ``grid``: every combination of
+    ``sobol``: the first N points of a scrambled Sobol' design of ``2^ceil(log2 N)`` points seeded by ``seed``
+    (balanced when N is a power of two); ``grid``: every combination of
     ``samples`` evenly spaced values per axis (the last quantity fastest). ``delay`` is rounded to 0 or 1.
     """
     N, d = spec.n_cases, len(spec.vary)

@@ -292,3 +292,27 @@ def test_manip_sweep_ctrl_c_exits_130_and_leaves_nothing_listening(tmp_path):
     listening = {c.laddr.port for c in psutil.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN}
     assert not (ports & listening)
     assert (out / PARTS_DIR).is_dir() and not (out / "results.csv").exists()  # kept for --resume
+
+
+@pytest.mark.parametrize("kind", ["ct", "pid"])
+def test_a_case_with_its_own_gains_equals_the_run_of_its_own_design(kind):
+    """The sweep keeps one controller per rate and overrides its gains: the same run as a new design's controller."""
+    from closed_loop.kernel import closed_loop_kernel
+    from closed_loop.schedule import Schedule, default_substeps
+    from control_design.design import design_robot
+    from control_design.reference import task_trajectory
+    from model.robot import load_robot
+
+    spec = spec_from_dict({"robot": "scara", "controller": kind, "samples": 3, "seed": 5, "rate_hz": 500.0,
+                           "vary": {"bandwidth": [20.0, 40.0], "damping": [0.5, 1.0]}}, "test.toml")
+    rows = run_cases(spec, np.arange(3))
+    robot = load_robot("scara")
+    task = task_trajectory(robot, "pick-and-place")
+    for case, (bw, zeta) in enumerate(case_values(spec)):
+        controller = design_robot(robot, kind, bw, zeta, rate_hz=500.0, analyse=False).controller(500.0)
+        sched = Schedule.build(robot, task, controller.dt)
+        sched = Schedule.build(robot, task, controller.dt, substeps=default_substeps(robot, controller.dt, sched.q0))
+        run = closed_loop_kernel(robot, kind).run(controller, sched, robot.parameters)
+        np.testing.assert_array_equal(rows[case, 2:6], run.max_error)
+        np.testing.assert_array_equal(rows[case, 6:10], run.rms_error)
+    assert len(set(rows[:, 0])) == 3  # three designs, three different runs
