@@ -221,12 +221,20 @@ def local_cluster(workers: int, host: str = "127.0.0.1") -> Iterator[Any]:
     cluster = None
     client = None
     try:
-        # no dashboard; the scheduler's HTTP endpoints (health, metrics) on a free port of ``host``, not 8787
+        # no dashboard; the scheduler's HTTP endpoints (health, metrics) on a free port of ``host``, not 8787.
+        # Logs: critical only (a failing case raises through its future; the shutdown of workers whose
+        # scheduler closed first, after Ctrl-C, would otherwise print heartbeat tracebacks).
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host=host, scheduler_port=0,
                                dashboard_address=None, scheduler_kwargs={"dashboard_address": f"{host}:0"},
-                               silence_logs=logging.ERROR)
+                               silence_logs=logging.CRITICAL)
         client = Client(cluster)
         yield client
+    except BaseException:
+        # Interrupted (Ctrl-C) or failed: closing cuts the comms of operations in flight, which the scheduler
+        # would log as tracebacks; the exception itself says what happened.
+        for name in ("distributed", "asyncio"):  # asyncio: "Task exception was never retrieved" of those comms
+            logging.getLogger(name).setLevel(logging.CRITICAL)
+        raise
     finally:
         if client is not None:
             client.close()

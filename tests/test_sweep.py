@@ -272,7 +272,9 @@ def test_manip_sweep_ctrl_c_exits_130_and_leaves_nothing_listening(tmp_path):
         root = psutil.Process(proc.pid)
         pids, ports = {proc.pid}, set()
         deadline = time.monotonic() + 180
-        while "cases (" not in err_log.read_text() and time.monotonic() < deadline and proc.poll() is None:
+        started = False
+        while not started and time.monotonic() < deadline and proc.poll() is None:
+            started = "cases (" in err_log.read_text()  # the cluster is up: one more look at its sockets
             for pid, c in _tree_sockets(root):
                 pids.add(pid)
                 if c.status == psutil.CONN_LISTEN:
