@@ -460,14 +460,12 @@ def _write_outputs(spec: SweepSpec, table: Any, summary: dict[str, Any], out: Pa
         table.to_parquet(tmp, index=False)
     write_atomic(files[2], json.dumps(summary, indent=1))
     if plots:
-        from model.files import atomic_path as _ap
-
         from .sweep_plots import sweep_figures
 
         worst = rerun_case(spec, summary["worst_case"]["case"])
         for name, fig in sweep_figures(spec, table, summary, worst).items():
             path = out / f"{name}.png"
-            with _ap(path) as tmp:
+            with atomic_path(path) as tmp:
                 fig.savefig(tmp, dpi=110)
             files.append(path)
     return files
