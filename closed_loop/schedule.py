@@ -37,16 +37,17 @@ MAX_SUBSTEP = 1e-3
 _STIFF_MARGIN = 0.5  # |h lambda| bound for the plant's fastest (friction) eigenvalue
 
 
-def default_substeps(plant: Robot, dt: float, q0: np.ndarray) -> int:
+def default_substeps(plant: Robot, dt: float, q0: np.ndarray, rate_factor: float = 1.0) -> int:
     """RK4 sub-steps per control period: ``h <= MAX_SUBSTEP`` and ``h * lambda_friction <= 0.5``.
 
     ``lambda_friction`` is the largest eigenvalue of ``B(q0)^-1 diag(G^2 B_m)``, the plant's
-    fastest open-loop decay rate (1/s), with the plant's friction parameters.
+    fastest open-loop decay rate (1/s), with the plant's friction parameters, times ``rate_factor``
+    (a bound for a plant whose inertia is not ``plant``'s: ``1 / s`` for link masses scaled by ``s < 1``).
     """
     G = plant.gear_ratio
     B_m = plant.parameters.viscous_friction
     Binv_F = np.linalg.solve(plant.inertia(q0), np.diag(G * G * B_m))
-    lam = float(np.max(np.abs(np.linalg.eigvals(Binv_F))))
+    lam = float(np.max(np.abs(np.linalg.eigvals(Binv_F)))) * rate_factor
     return max(1, math.ceil(dt / MAX_SUBSTEP - 1e-9), math.ceil(dt * lam / _STIFF_MARGIN - 1e-9))
 
 

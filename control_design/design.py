@@ -125,7 +125,8 @@ class RobotDesign:
 
 def design_robot(robot: Robot, kind: str = "pd", bandwidth: float = DEFAULT_BANDWIDTH, damping: float | None = None, *,
                  phase_margin: float | None = None, rate_hz: float | None = DEFAULT_RATE_HZ,
-                 reference: Trajectory | None = None, rule: str = "max", analyse: bool = True) -> RobotDesign:
+                 reference: Trajectory | None = None, rule: str = "max", analyse: bool = True,
+                 joint_model: DecoupledModel | None = None) -> RobotDesign:
     """Design every joint loop of ``robot``.
 
     Parameters
@@ -146,6 +147,10 @@ def design_robot(robot: Robot, kind: str = "pd", bandwidth: float = DEFAULT_BAND
         Design inertia of the decoupled joints: 'max' or 'mean'.
     analyse
         Compute the per-joint reports (margins, step metrics, coupling rejection).
+    joint_model
+        The decoupled model to design on, as :func:`~control_design.joint_model.decoupled_model` of ``robot``
+        gives it (default: computed here from ``reference`` and ``rule``, which then are not used); it does not
+        depend on the bandwidth, damping or rate, so many designs (a sweep) can share one.
 
     Raises
     ------
@@ -154,8 +159,12 @@ def design_robot(robot: Robot, kind: str = "pd", bandwidth: float = DEFAULT_BAND
     check_spec(kind, bandwidth, damping, phase_margin, rate_hz, CONTROLLER_KINDS)
     if damping is None and phase_margin is None:
         damping = DEFAULT_DAMPING
-    ref = reference_task(robot) if reference is None else reference
-    model = decoupled_model(robot, ref, rule=rule, reference_name=reference_task_name(robot) if reference is None else "")
+    if joint_model is None:
+        ref = reference_task(robot) if reference is None else reference
+        model = decoupled_model(robot, ref, rule=rule,
+                                reference_name=reference_task_name(robot) if reference is None else "")
+    else:
+        model = joint_model
     if kind == CT_KIND:
         loops = design_outer_loops(robot, bandwidth, damping, phase_margin=phase_margin, rate_hz=rate_hz)
         coupling = [0.0] * robot.n  # cancelled by the inverse dynamics when the model is exact

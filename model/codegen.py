@@ -403,6 +403,14 @@ class CompiledLibrary:
     def __contains__(self, name: str) -> bool:
         return name in self.signatures
 
+    def entry_points(self, name: str) -> tuple[int, int]:
+        """Addresses of Function ``name``'s evaluation and work-size functions (for handwritten C that calls it)."""
+        return self._pointers[name]
+
+    def symbol(self, name: str) -> ctypes._CFuncPtr:
+        """A C function of the library by name (e.g. the entry point of an ``extra_sources`` file)."""
+        return getattr(self._lib, name)
+
     def point_evaluator(self, name: str, external: Mapping[int, np.ndarray] | None = None) -> "PointEvaluator":
         """A :class:`PointEvaluator` of Function ``name`` (one point per call, buffers allocated once)."""
         return PointEvaluator(self, name, external)
@@ -606,6 +614,7 @@ def build_library(
     optimisation: str | None = None,
     jobs: int | None = None,
     progress: Progress | None = None,
+    extra_sources: Sequence[Path] = (),
 ) -> tuple[CompiledLibrary, BuildInfo]:
     """Load the library for ``key_material`` from the cache, or generate and compile it.
 
@@ -628,6 +637,9 @@ def build_library(
         Parallel compiler processes; :func:`build_jobs` by default.
     progress
         Called with a :class:`BuildEvent` at each stage (and as each unit finishes compiling).
+    extra_sources
+        Handwritten C files linked in besides ``batch.c`` (compiled with :data:`BASE_CFLAGS`; their
+        contents are part of the key), e.g. the closed-loop kernel; they may include ``casadi_abi.h``.
 
     A cached library whose SHA-256 differs from the one recorded at build time, or
     that does not load, is deleted and rebuilt with a :class:`CorruptCacheWarning`.
@@ -645,6 +657,9 @@ def build_library(
 
     t0 = time.perf_counter()
     compiler = find_compiler()
+    extra = [Path(x) for x in extra_sources]
+    if extra:
+        key_material += "|" + ",".join(f"{x.name}:{_file_sha256(x)}" for x in extra)
     key = _key(key_material, f"{compiler} {_compiler_version(compiler)}", optimisation)
     folder = Path(directory) if directory is not None else cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
@@ -680,6 +695,9 @@ def build_library(
         units = [(src, tmp_dir / f"{src.stem}.o", compile_flags(generated=True, optimisation=lvl))
                  for src, lvl in zip(sources, levels)]
         units.append((src_dir / BATCH_SOURCE.name, tmp_dir / "mw_batch.o", compile_flags(generated=False)))
+        for x in extra:
+            shutil.copyfile(x, src_dir / x.name)
+            units.append((src_dir / x.name, tmp_dir / f"mw_extra_{x.stem}.o", compile_flags(generated=False)))
         order = sorted(range(len(units)), key=lambda i: -(c_bytes[i] if i < len(c_bytes) else 0))  # largest first
         units = [units[i] for i in order]
         n_jobs = jobs or build_jobs()

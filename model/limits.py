@@ -16,7 +16,9 @@ and the limit, before it can cost minutes or gigabytes:
   instants of a closed-loop run), so that a long duration (``--segment-time 1e9``)
   is refused before it allocates arrays of that length;
 * ``MAX_FMU_*``: an FMU archive (:mod:`fmu.archive` checks them before anything
-  is extracted).
+  is extracted);
+* :data:`MAX_SPEC_BYTES`, :data:`MAX_SWEEP_CASES`: a sweep spec (:mod:`closed_loop.sweep`) and the
+  number of cases it asks for (a grid's is the product of its axes, checked before any work).
 
 The readers turn what the parser cannot bound itself (nesting so deep that it
 exhausts the recursion limit, bytes that are not UTF-8) into the same one-line
@@ -38,6 +40,8 @@ __all__ = [
     "MAX_JOINTS",
     "MAX_WAYPOINTS",
     "MAX_SAMPLES",
+    "MAX_SPEC_BYTES",
+    "MAX_SWEEP_CASES",
     "MAX_FMU_MEMBERS",
     "MAX_FMU_MEMBER_BYTES",
     "MAX_FMU_TOTAL_BYTES",
@@ -57,6 +61,11 @@ MAX_WAYPOINTS = 100_000
 #: Most samples of one time grid: 5 million instants are 83 min at 1 kHz; a closed-loop run keeps about
 #: six (n,) float arrays per instant (q, qd, tau and the reference), 1.7 GB for 7 joints at this limit.
 MAX_SAMPLES = 5_000_000
+#: Largest sweep spec, bytes (64 KiB: a spec is a dozen lines).
+MAX_SPEC_BYTES = 64 * 1024
+#: Most cases of one sweep: at ~5 ms a case (the compiled loop, 15 s at 1 kHz) 10^6 cases are ~1.4 core-hours,
+#: and the table ~1 GB; a grid beyond it is a typo (samples per axis, not in total).
+MAX_SWEEP_CASES = 1_000_000
 #: Most members (files and folders) of an FMU archive (an exported FMU has about 15).
 MAX_FMU_MEMBERS = 1000
 #: Largest uncompressed member of an FMU archive, bytes (256 MiB).
@@ -120,15 +129,15 @@ def read_bounded(path: str | Path, what: str, error: type[ValueError], limit: in
     return data
 
 
-def load_toml(path: str | Path, what: str, error: type[ValueError]) -> dict[str, Any]:
-    """Parse a user's TOML file within :data:`MAX_FILE_BYTES`.
+def load_toml(path: str | Path, what: str, error: type[ValueError], limit: int = MAX_FILE_BYTES) -> dict[str, Any]:
+    """Parse a user's TOML file within ``limit`` bytes (default :data:`MAX_FILE_BYTES`).
 
     Raises
     ------
     error
         Naming the file: too large, not UTF-8, not valid TOML, or nested too deeply to parse.
     """
-    data = read_bounded(path, what, error)
+    data = read_bounded(path, what, error, limit)
     try:
         return tomllib.loads(data.decode("utf-8"))
     except UnicodeDecodeError as exc:

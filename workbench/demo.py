@@ -28,6 +28,7 @@ from .outputs import write_json
 from .report import Report
 from .sections import (design_section, fmu_section, motion_section, robot_section, task_section, torque_limit_section,
                        tracking_section)
+from .report_sweep import sweep_section
 from .workspace import workspace_section
 
 __all__ = ["DemoResult", "run_demo", "Progress"]
@@ -86,7 +87,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     gif = gif and plots
-    progress = Progress(8 if gif else 7, stream)
+    progress = Progress(9 if gif else 8, stream)
     files: list[Path] = []
 
     def warn(line: str) -> None:
@@ -145,6 +146,10 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
         progress.note(f"{label}: max error {np.max(max_error[kind]):.3e}, FMU vs Python {diff:.3e}")
     metrics = {kind: fmu_results[kind].metrics().to_dict() for kind in fmu_results}
     files.append(write_json(out / "metrics.json", metrics))
+
+    progress.step("a robustness sweep: computed torque over payload x friction, compiled loops on Dask")
+    files += sweep_section(report, out / "sweep", robot_name, plots=plots, rate_hz=rate_hz, bandwidth=bandwidth,
+                           note=progress.note, rel_to=out)
 
     if gif:
         progress.step("animating the arm along the closed-loop motion")

@@ -65,6 +65,7 @@ def rne_sx(
     params: SymbolicParameters,
     *,
     with_friction: bool = True,
+    link_mass_scale: Any = None,
 ) -> ca.SX:
     """(n, 1) joint torques ``tau = B qdd + C qd + g + F`` by recursive Newton-Euler.
 
@@ -80,6 +81,9 @@ def rne_sx(
         Symbolic payload (tip frame), friction and gravity (world frame).
     with_friction
         Add F(qd); False gives the rigid-body-plus-rotor torque only.
+    link_mass_scale
+        None (the description's links), or a (symbolic) factor on every link's mass and inertia
+        (centres of mass, rotors and payload unchanged): the plant of a sweep over link masses.
     """
     n = desc.n
     chain = build_chain(desc)
@@ -119,7 +123,10 @@ def rne_sx(
     for i in reversed(range(n)):
         w, wd, vd = w_list[i], wd_list[i], vd_list[i]
         c_i = ca.DM(chain.com[i])
-        F, N = _body_wrench(chain.mass[i], c_i, ca.DM(chain.inertia[i]), w, wd, vd)
+        m_i, I_i = chain.mass[i], ca.DM(chain.inertia[i])
+        if link_mass_scale is not None:
+            m_i, I_i = m_i * link_mass_scale, I_i * link_mass_scale
+        F, N = _body_wrench(m_i, c_i, I_i, w, wd, vd)
         if i + 1 < n:
             A_next = A_list[i + 1]
             f_out = A_next[0:3, 0:3] @ f

@@ -43,6 +43,7 @@ __all__ = [
     "COMPILED_FUNCTIONS",
     "DynamicsFunctions",
     "LagrangeFunctions",
+    "accel_scaled_function",
     "build_functions",
     "build_lagrange_functions",
     "coriolis_ne_sx",
@@ -129,15 +130,42 @@ def _without_gravity(params: SymbolicParameters) -> SymbolicParameters:
     return params._replace(gravity=ca.SX.zeros(3, 1))
 
 
-def _inertia_columns_ne(desc: RobotDescription, motor_model: str, q: ca.SX, params: SymbolicParameters) -> ca.SX:
+def _inertia_columns_ne(desc: RobotDescription, motor_model: str, q: ca.SX, params: SymbolicParameters,
+                        link_mass_scale: ca.SX | None = None) -> ca.SX:
     """(n, n) ``[rne(q, 0, e_1) ... rne(q, 0, e_n)]`` without gravity and friction (its lower triangle is B's)."""
     n = desc.n
     zero = ca.SX.zeros(n, 1)
     no_gravity = _without_gravity(params)
     return ca.horzcat(*[
-        rne_sx(desc, motor_model, q, zero, ca.SX(ca.DM.eye(n)[:, j]), no_gravity, with_friction=False)
+        rne_sx(desc, motor_model, q, zero, ca.SX(ca.DM.eye(n)[:, j]), no_gravity, with_friction=False,
+               link_mass_scale=link_mass_scale)
         for j in range(n)
     ])
+
+
+def _accel_sx(desc: RobotDescription, motor_model: str, s: "_Symbols", link_mass_scale: ca.SX | None = None,
+              B_cols: ca.SX | None = None) -> ca.SX:
+    """``B^-1 (tau - rne(q, qd, 0))`` by an LDL^T solve of the Newton-Euler inertia columns."""
+    zero = ca.SX.zeros(desc.n, 1)
+    h = rne_sx(desc, motor_model, s.q, s.qd, zero, s.params, link_mass_scale=link_mass_scale)
+    if B_cols is None:
+        B_cols = _inertia_columns_ne(desc, motor_model, s.q, s.params, link_mass_scale)
+    return ldl_solve_sx(B_cols, s.tau - h)  # reads the lower triangle only: the unused entries are pruned
+
+
+def accel_scaled_function(desc: RobotDescription, motor_model: str = "reflected") -> ca.Function:
+    """``accel_scaled(q, qd, tau, p, link_mass_scale) -> qdd``: :attr:`DynamicsFunctions.accel` with every link's
+    mass and inertia times the scalar input ``link_mass_scale`` (centres of mass, rotors, payload unchanged).
+
+    The same Newton-Euler construction as ``accel`` (at a scale of 1 it computes the same numbers), so one
+    compiled plant serves a sweep over link masses; a scaled description would need a build per value.
+    """
+    check_motor_model(motor_model)
+    s = _Symbols(desc)
+    scale = ca.SX.sym("link_mass_scale")
+    qdd = _accel_sx(desc, motor_model, s, scale)
+    return ca.Function("accel_scaled", [s.q, s.qd, s.tau, s.p, scale], [ca.densify(ca.cse(qdd))],
+                       ["q", "qd", "tau", "p", "link_mass_scale"], ["qdd"])
 
 
 def coriolis_ne_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX, params: SymbolicParameters,
@@ -164,10 +192,9 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
     zero = ca.SX.zeros(desc.n, 1)
 
     tau_ne = rne_sx(desc, motor_model, q, qd, qdd, params)
-    h = rne_sx(desc, motor_model, q, qd, zero, params)
     B_cols = _inertia_columns_ne(desc, motor_model, q, params)
     B = ca.tril(B_cols) + ca.tril(B_cols, False).T  # the lower triangle, mirrored: exactly symmetric
-    qdd_ne = ldl_solve_sx(B_cols, tau - h)  # reads the lower triangle only: the unused entries are pruned
+    qdd_ne = _accel_sx(desc, motor_model, s, B_cols=B_cols)
     g = rne_sx(desc, motor_model, q, zero, zero, params, with_friction=False)
     C = coriolis_ne_sx(desc, motor_model, q, qd, params, B)
     F = s.friction(qd)

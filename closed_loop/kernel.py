@@ -1,0 +1,226 @@
+"""The compiled closed loop: one C call runs a whole :func:`~closed_loop.simulate.simulate_tracking`.
+
+One library per (robot, motor model, controller kind), built by the one pipeline
+(:func:`model.codegen.build_library`) and cached on disk: the plant's
+``accel_scaled(q, qd, tau, p, link_mass_scale)``
+(:func:`model.dynamics.symbolic.accel_scaled_function`, the Newton-Euler ``accel`` with
+the link masses and inertias times a scalar input), the law's
+:func:`~control_design.laws.controller_function` (the same Function the Python
+controller runs) and the handwritten loop ``closed_loop/c/kernel.c``. Everything a
+sweep varies is an input, so one compiled kernel serves every case: the plant
+parameter vector ``p`` (payload, friction, gravity), the link-mass scale, the
+controller's parameters (gains, limits, the model's ``p``), and the
+:class:`~closed_loop.schedule.Schedule` (control rate: periods and sub-steps, the
+reference samples) with an optional one-period delay (as
+:class:`~closed_loop.delay.OnePeriodDelay`).
+
+The loop does the Python loop's arithmetic operation for operation (same RK4 form,
+same sub-steps, the schedule's reference arrays, ``-ffp-contract=off``), so the
+samples agree with :func:`~closed_loop.simulate.simulate_tracking` to rounding (the
+tests hold them to 1e-12). Metrics are accumulated in C during the run.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+import numpy as np
+
+from control_design.controllers import LawController
+from control_design.errors import DesignSpecError
+from control_design.laws import control_law, controller_function, law_fingerprint
+from model.codegen import CompiledLibrary, Progress, build_library
+from model.dynamics.core import source_fingerprint
+from model.dynamics.parameters import DynamicsParameters
+from model.dynamics.symbolic import accel_scaled_function
+from model.robot import Robot
+
+from .result import TrackingResult
+from .schedule import Schedule
+
+__all__ = ["KERNEL_SOURCE", "ClosedLoopKernel", "KernelRun", "closed_loop_kernel"]
+
+#: The handwritten loop around the generated functions.
+KERNEL_SOURCE = Path(__file__).resolve().parent / "c" / "kernel.c"
+_N_METRICS = 5
+_SAT_MARGIN = 1 - 1e-12  # as TrackingResult.metrics: |tau| at (1 - 1e-12) of its limit counts as saturated
+
+_P = ctypes.c_void_p
+_ARGTYPES = [_P, _P, _P, _P, _P, _P, ctypes.c_double, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P]
+
+
+@dataclass(frozen=True)
+class KernelRun:
+    """The metrics of one compiled closed-loop run (per joint, as :class:`~closed_loop.result.TrackingMetrics`).
+
+    Attributes
+    ----------
+    max_error, rms_error
+        (n,) max and RMS ``|q_ref - q|`` over the control samples, rad or m.
+    peak_motor_torque, peak_motor_velocity
+        (n,) max ``|tau_m|`` (N m) and ``|G qd|`` (rad/s).
+    saturated_fraction
+        (n,) fraction of the samples with ``|tau_m|`` at its limit.
+    diverged
+        True if the state became non-finite; the run stopped there (metrics up to it).
+    t_end
+        Time of the last sample reached, s.
+    result
+        The samples as a :class:`~closed_loop.result.TrackingResult` when recorded (and not diverged), else None.
+    """
+
+    max_error: np.ndarray
+    rms_error: np.ndarray
+    peak_motor_torque: np.ndarray
+    peak_motor_velocity: np.ndarray
+    saturated_fraction: np.ndarray
+    diverged: bool
+    t_end: float
+    result: TrackingResult | None = None
+
+
+class ClosedLoopKernel:
+    """The compiled closed loop of one robot (as the controller's model) and one controller kind.
+
+    Parameters
+    ----------
+    robot
+        The controller's robot model; the plant is this robot with other parameters and link masses.
+    kind
+        The controller kind (:data:`~control_design.laws.LAW_KINDS`).
+    progress
+        Receives the build's :class:`~model.codegen.BuildEvent` (a cache hit is one event).
+    """
+
+    def __init__(self, robot: Robot, kind: str, progress: Progress | None = None) -> None:
+        self.robot = robot
+        self.kind = kind
+        n = robot.n
+        desc = robot.description
+        self.law = control_law(kind, n, robot)
+        self.function = controller_function(self.law)
+        self.controller_name = self.function.name()
+        key = (f"closed-loop kernel|{kind}|{n}|{law_fingerprint()}|{desc.digest()}|{robot.motor_model}"
+               f"|{source_fingerprint()}")
+        stem = f"kernel-{desc.identifier}-{robot.motor_model}-{kind}"
+        self.library: CompiledLibrary
+        self.library, self.build_info = build_library(
+            stem, key, lambda: [accel_scaled_function(desc, robot.motor_model), self.function],
+            progress=progress, extra_sources=(KERNEL_SOURCE,))
+        fn = self.library.symbol("mw_closed_loop")
+        fn.restype = ctypes.c_int
+        fn.argtypes = _ARGTYPES
+        self._fn = fn
+        self._accel = self.library.entry_points("accel_scaled")
+        self._ctrl = self.library.entry_points(self.controller_name)
+        f = self.function
+        self._in_names = [f.name_in(i) for i in range(f.n_in())]
+        self._state_index = self._in_names.index("z") if "z" in self._in_names else -1
+
+    def run(self, controller: LawController, schedule: Schedule, plant_parameters: DynamicsParameters, *,
+            link_mass_scale: float = 1.0, delay: bool = False, record: bool = False,
+            values: Mapping[str, Any] | None = None) -> KernelRun:
+        """Run ``controller`` on the plant along ``schedule`` in one C call.
+
+        Parameters
+        ----------
+        controller
+            A controller of this kernel's kind and robot (e.g. ``design.controller(rate)``); its rate must be
+            the schedule's.
+        schedule
+            The run's instants, references, start state and sub-steps (:meth:`Schedule.build`).
+        plant_parameters
+            The plant's parameter vector (payload, friction, gravity) on this robot's layout.
+        link_mass_scale
+            Plant link masses and inertias = this times the model's (> 0).
+        delay
+            Torques reach the plant one period late (:class:`~closed_loop.delay.OnePeriodDelay`).
+        record
+            Also return the samples (:attr:`KernelRun.result`).
+        values
+            Parameter inputs of the law that replace ``controller``'s, by name (e.g. the ``Kp``, ``Kd``, ``Ki``
+            of another design at the same rate: a sweep over gains needs no new controller per case).
+
+        Raises
+        ------
+        control_design.errors.DesignSpecError
+            A controller of another kind or joint count, a rate that is not the schedule's, a bad scale.
+        """
+        n = self.robot.n
+        if getattr(controller, "kind", None) != self.kind or controller.n != n:
+            raise DesignSpecError(f"controller: expected a {self.kind!r} controller of {n} joints, "
+                                  f"got {getattr(controller, 'kind', type(controller).__name__)!r}")
+        if abs(controller.dt - schedule.dt) > 1e-15 * schedule.dt:
+            raise DesignSpecError(f"controller: its period {controller.dt:g} s is not the schedule's {schedule.dt:g} s")
+        if not (np.isfinite(link_mass_scale) and link_mass_scale > 0):
+            raise DesignSpecError(f"link_mass_scale: expected a factor > 0, got {link_mass_scale!r}")
+        p = self.robot.dynamics.check_parameters(plant_parameters).vector
+        own = controller.parameter_values()
+        if values:
+            unknown = [k for k in values if k not in own]
+            if unknown:
+                raise DesignSpecError(f"values: {unknown[0]!r} is not a parameter of the {self.kind!r} law "
+                                      f"(expected one of {', '.join(own)})")
+            own.update({k: np.broadcast_to(np.asarray(v, dtype=np.float64), own[k].shape) for k, v in values.items()})
+        values = own
+        inputs: list[np.ndarray | None] = []
+        for i, name in enumerate(self._in_names):
+            if i < len(self.law.signals) or i == self._state_index:
+                inputs.append(None)
+            else:
+                inputs.append(np.ascontiguousarray(values[name], dtype=np.float64))
+        ctrl_in = (ctypes.c_void_p * len(inputs))(*[None if a is None else a.ctypes.data for a in inputs])
+        steps = schedule.steps
+        dims = np.array([n, len(inputs), len(self.law.signals), self._state_index, int(delay), schedule.substeps,
+                         steps], dtype=np.int64)
+        G = np.ascontiguousarray(controller.G, dtype=np.float64)
+        tau_sat = None if controller.tau_m_max is None else np.ascontiguousarray(controller.tau_m_max * _SAT_MARGIN)
+        refs = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q_ref, schedule.qd_ref, schedule.qdd_ref)]
+        x0 = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q0, schedule.qd0)]
+        scale = np.array([float(link_mass_scale)])
+        metrics = np.zeros((_N_METRICS, n))
+        traj = [np.empty((steps + 1, n)) for _ in range(3)] if record else [None, None, None]
+        last = ctypes.c_longlong(0)
+
+        def ptr(a: np.ndarray | None) -> int | None:
+            return None if a is None else a.ctypes.data
+
+        h = schedule.dt / schedule.substeps
+        status = self._fn(self._accel[0], self._accel[1], self._ctrl[0], self._ctrl[1], ptr(dims), ctrl_in, h,
+                          ptr(p), ptr(scale), ptr(G), ptr(tau_sat), *(ptr(a) for a in refs), *(ptr(a) for a in x0),
+                          ptr(metrics), *(ptr(a) for a in traj), ctypes.byref(last))
+        if status < 0:
+            raise RuntimeError(f"closed-loop kernel {self.kind!r}: failed with status {status}")
+        k = int(last.value)
+        result = None
+        if record and status == 0:
+            result = schedule.result(self.robot, self.kind, *traj, controller.tau_m_max, 0.0)
+        return KernelRun(max_error=metrics[0].copy(), rms_error=metrics[1].copy(), peak_motor_torque=metrics[2].copy(),
+                         peak_motor_velocity=metrics[3].copy(), saturated_fraction=metrics[4].copy(),
+                         diverged=status == 1, t_end=float(schedule.t[min(k, steps)]), result=result)
+
+
+_KERNELS: dict[tuple[str, str, str], ClosedLoopKernel] = {}
+_KERNELS_LOCK = threading.Lock()
+
+
+def closed_loop_kernel(robot: Robot, kind: str, progress: Progress | None = None) -> ClosedLoopKernel:
+    """The :class:`ClosedLoopKernel` of ``robot`` and ``kind``, built (or loaded from the disk cache) once per process."""
+    key = (robot.description.digest(), robot.motor_model, kind)
+    with _KERNELS_LOCK:
+        if key not in _KERNELS:
+            _KERNELS[key] = ClosedLoopKernel(robot, kind, progress)
+        kernel = _KERNELS[key]
+    if kernel.robot is not robot:  # the same physical robot: the kernel is valid, it must use the caller's object
+        kernel = _rebind(kernel, robot)
+    return kernel
+
+
+def _rebind(kernel: ClosedLoopKernel, robot: Robot) -> ClosedLoopKernel:
+    other = object.__new__(ClosedLoopKernel)
+    other.__dict__.update(kernel.__dict__)
+    other.robot = robot
+    return other
