@@ -323,24 +323,31 @@ class VariableTable:
                      + unknowns("InitialUnknown", self.initial_unknowns)
                      + [f'    <EventIndicator valueReference="{a.vr}"/>' for a in indicators])
         values = {
-            "model_name": quoteattr(spec.model_name),
-            "model_identifier": quoteattr(spec.model_identifier),
-            "guid": quoteattr(guid),
-            "description": quoteattr(spec.description),
-            "generation_tool": quoteattr(f"manipulator-workbench {version}"),
+            **self._header_values(guid, version),
             "model_exchange": "" if spec.discrete is not None else (
                 f"  <ModelExchange\n    modelIdentifier={quoteattr(spec.model_identifier)}\n"
                 '    canGetAndSetFMUState="true"\n    canSerializeFMUState="true"\n'
                 '    providesDirectionalDerivatives="true"\n    providesAdjointDerivatives="true"/>\n'),
-            "unit_definitions": self._unit_definitions(),
-            "stop_time": _xml_number(spec.stop_time),
-            "step_size": _xml_number(spec.step),
             "annotations": self._annotations_fmi3(),
             "time_vr": str(FMI3_TIME_VR),
             "model_variables": "\n".join(self._array_variable(a, of_row) for a in arrays),
             "model_structure": "\n".join(structure),
         }
         return _template("modelDescription3.xml").substitute(values)
+
+    def _header_values(self, guid: str, version: str) -> dict[str, str]:
+        """The template values both FMI versions' descriptions share: names, GUID, tool, units, experiment."""
+        spec = self.spec
+        return {
+            "model_name": quoteattr(spec.model_name),
+            "model_identifier": quoteattr(spec.model_identifier),
+            "guid": quoteattr(guid),
+            "description": quoteattr(spec.description),
+            "generation_tool": quoteattr(f"manipulator-workbench {version}"),
+            "unit_definitions": self._unit_definitions(),
+            "stop_time": _xml_number(spec.stop_time),
+            "step_size": _xml_number(spec.step),
+        }
 
     def _array_variable(self, a: ArrayVariable, of_row: dict[int, ArrayVariable]) -> str:
         rows = [self.variables[r] for r in a.rows()]
@@ -372,21 +379,14 @@ class VariableTable:
         spec = self.spec
         files = "\n".join(f'      <File name={quoteattr(f)}/>' for f in source_files)
         values = {
-            "model_name": quoteattr(spec.model_name),
-            "model_identifier": quoteattr(spec.model_identifier),
-            "guid": quoteattr(guid),
-            "description": quoteattr(spec.description),
-            "generation_tool": quoteattr(f"manipulator-workbench {version}"),
+            **self._header_values(guid, version),
             "source_files": files,
-            "unit_definitions": self._unit_definitions(),
-            "stop_time": _xml_number(spec.stop_time),
             "event_indicators": str(spec.modes.nz if spec.modes is not None else 0),
             "model_exchange": "" if spec.discrete is not None else (
                 f"  <ModelExchange\n    modelIdentifier={quoteattr(spec.model_identifier)}\n"
                 '    canGetAndSetFMUstate="true"\n    canSerializeFMUstate="true"\n'
                 f'    providesDirectionalDerivative="true">\n    <SourceFiles>\n{files}\n    </SourceFiles>\n'
                 "  </ModelExchange>\n"),
-            "step_size": _xml_number(spec.step),
             "vendor_annotations": self._vendor_annotations(),
             "model_variables": "\n".join(self._scalar_variable(v) for v in self.variables),
             "outputs": _unknowns_xml("Outputs", self.outputs),
