@@ -245,7 +245,7 @@ def local_cluster(workers: int, host: str = "127.0.0.1") -> Iterator[Any]:
 def _batch_size(spec: SweepSpec, n_todo: int, workers: int) -> int:
     if spec.batch:
         return spec.batch
-    return max(1, min(250, math.ceil(n_todo / (8 * max(workers, 1)))))
+    return max(1, min(100, math.ceil(n_todo / (8 * max(workers, 1)))))
 
 
 def _read_parts(parts: Path) -> dict[int, np.ndarray]:
