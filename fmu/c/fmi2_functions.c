@@ -299,15 +299,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     for (i = 0; i < nvr; i++) {
         const MwVariable *v = lookup(inst, "fmi2SetReal", vr[i]);
         if (v == NULL || !settable_now(inst, v)) return fmi2Error;
-        if (!isfinite(value[i])) {
-            snprintf(what, sizeof(what), "variable %.60s: value %g is not finite", v->name, value[i]);
-            return fail(inst, "fmi2SetReal", what);
-        }
-        if (value[i] < v->min || value[i] > v->max) {
-            snprintf(what, sizeof(what), "variable %.60s: value %.17g is outside [%g, %g]", v->name, value[i], v->min,
-                     v->max);
-            return fail(inst, "fmi2SetReal", what);
-        }
+        if (mw_value_problem(v, value[i], what, sizeof(what)) != NULL) return fail(inst, "fmi2SetReal", what);
     }
     for (i = 0; i < nvr; i++) {
         if (mw_assign(inst, &inst->model->variables[vr[i]], value[i]) != 0)
@@ -571,24 +563,9 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentCommunicationPoint) {
-    const char *fn = "fmi2DoStep";
-    fmi2Status status;
-    char what[256];
-    const char *problem;
-    unsigned long long ticks = 1, n = 1;
     ENTER(DoStep, FOR_CS, MODES_DoStep);
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
-    problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
-    if (problem != NULL) return fail(inst, fn, problem);
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s (%llu sample periods)", fn,
-           currentCommunicationPoint, ticks * n, communicationStepSize / (double)(ticks * n), ticks);
-    status = (fmi2Status)mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
-    if (status == fmi2Discard) {
-        inst->mode = MW_MODE_STEP_FAILED;
-    } else if (status == fmi2Error) {
-        inst->mode = MW_MODE_ERROR;
-    }
-    return status;
+    return (fmi2Status)mw_do_step(inst, "fmi2DoStep", currentCommunicationPoint, communicationStepSize);
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {

@@ -361,15 +361,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
         for (k = 0; k < a->count; k++, at++) {
             const MwVariable *v = &inst->model->variables[a->first + k];
             if (!settable_now(inst, a, v)) return fmi3Error;
-            if (!isfinite(values[at])) {
-                snprintf(what, sizeof(what), "variable %.60s: value %g is not finite", v->name, values[at]);
-                return fail(inst, fn, what);
-            }
-            if (values[at] < v->min || values[at] > v->max) {
-                snprintf(what, sizeof(what), "variable %.60s: value %.17g is outside [%g, %g]", v->name, values[at],
-                         v->min, v->max);
-                return fail(inst, fn, what);
-            }
+            if (mw_value_problem(v, values[at], what, sizeof(what)) != NULL) return fail(inst, fn, what);
         }
     }
     for (i = 0, at = 0; i < nValueReferences; i++) {
@@ -851,24 +843,17 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
     const char *fn = "fmi3DoStep";
     MwStatus status;
-    char what[256];
-    const char *problem;
-    unsigned long long ticks = 1, n = 1;
     ENTER(DoStep, FOR_CS, MODES_DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
     if (null_arg(inst, fn, "eventHandlingNeeded", eventHandlingNeeded) ||
         null_arg(inst, fn, "terminateSimulation", terminateSimulation) || null_arg(inst, fn, "earlyReturn", earlyReturn) ||
         null_arg(inst, fn, "lastSuccessfulTime", lastSuccessfulTime))
         return fmi3Error;
-    problem = mw_step_plan(inst, currentCommunicationPoint, communicationStepSize, &ticks, &n, what, sizeof(what));
-    if (problem != NULL) return fail(inst, fn, problem);
-    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s (%llu sample periods)", fn,
-           currentCommunicationPoint, ticks * n, communicationStepSize / (double)(ticks * n), ticks);
-    status = mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize, ticks, n);
+    status = mw_do_step(inst, fn, currentCommunicationPoint, communicationStepSize);
+    if (status == MW_ERROR) return fmi3Error; /* a refused step: the out-arguments are not written */
     *eventHandlingNeeded = fmi3False;
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
     *lastSuccessfulTime = inst->last_successful_time;
-    if (status == MW_DISCARD) inst->mode = MW_MODE_STEP_FAILED;
     return (fmi3Status)status;
 }

@@ -540,13 +540,18 @@ static int tick(MwInstance *inst) {
     return 0;
 }
 
-MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long ticks,
-                    unsigned long long n) {
+MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h) {
     const size_t nx = inst->model->nx, nz = inst->model->nz, nd = inst->model->nd;
-    const double hs = h / (double)(ticks * n);
-    unsigned long long j, k = 0;
+    unsigned long long ticks = 1, n = 1, j, k = 0;
     int changed, x_changed, status;
+    char what[256];
+    const char *problem = mw_step_plan(inst, tc, h, &ticks, &n, what, sizeof(what));
+    double hs;
 
+    if (problem != NULL) return mw_fail(inst, fn, problem);
+    hs = h / (double)(ticks * n);
+    mw_log(inst, MW_OK, MW_LOG_CALLS, "%s: from t = %.17g, %llu sub-steps of %.17g s (%llu sample periods)", fn, tc,
+           ticks * n, hs, ticks);
     if (nx > 0) memcpy(inst->x_save, inst->x, nx * sizeof(double));
     if (nz > 0) memcpy(inst->m_save, inst->m, nz * sizeof(double));
     if (nd > 0) memcpy(inst->d_save, inst->d, nd * sizeof(double));
@@ -569,6 +574,7 @@ MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsig
                fn, status == -1 ? "the state became non-finite" :
                status == -2 ? "the friction modes did not settle" : "more than 64 friction events",
                k, n, j, ticks, tc);
+        inst->mode = MW_MODE_STEP_FAILED;
         return MW_DISCARD;
     }
     inst->time = tc + h;
@@ -828,6 +834,18 @@ const char *mw_state_deserialize(MwInstance *inst, const unsigned char *in, size
 }
 
 /* --------------------------------------------------------- argument checks */
+
+const char *mw_value_problem(const MwVariable *v, double value, char *what, size_t len) {
+    if (!isfinite(value)) {
+        snprintf(what, len, "variable %.60s: value %g is not finite", v->name, value);
+        return what;
+    }
+    if (value < v->min || value > v->max) {
+        snprintf(what, len, "variable %.60s: value %.17g is outside [%g, %g]", v->name, value, v->min, v->max);
+        return what;
+    }
+    return NULL;
+}
 
 MwStatus mw_fail(MwInstance *inst, const char *fn, const char *what) {
     mw_log(inst, MW_ERROR, MW_LOG_ERROR, "%s: %s", fn, what);

@@ -127,6 +127,7 @@ struct MwSnapshot {
 #define mw_do_step MW_SYMBOL(mw_do_step)
 #define mw_ticks MW_SYMBOL(mw_ticks)
 #define mw_step_plan MW_SYMBOL(mw_step_plan)
+#define mw_value_problem MW_SYMBOL(mw_value_problem)
 #define mw_is_close MW_SYMBOL(mw_is_close)
 #define mw_past_stop_time MW_SYMBOL(mw_past_stop_time)
 #define mw_events MW_SYMBOL(mw_events)
@@ -218,12 +219,12 @@ MW_HIDDEN int mw_is_close(double a, double b);
 /* Whether t is past the experiment's stopTime, rounding forgiven. */
 MW_HIDDEN int mw_past_stop_time(const MwInstance *inst, double t);
 /*
- * The co-simulation step from tc to tc + h: ticks sample periods (1 without sampled states), each a
- * tick of d then n RK4 sub-steps; MW_DISCARD keeps the state at tc (fn: the calling FMI function,
- * for the message).
+ * The co-simulation step from tc to tc + h, planned by mw_step_plan (a step it refuses is MW_ERROR through
+ * mw_fail): the sample periods (1 without sampled states), each a tick of d then its RK4 sub-steps.
+ * MW_DISCARD keeps the state at tc and puts the instance in MW_MODE_STEP_FAILED (fn: the calling FMI
+ * function, for the messages).
  */
-MW_HIDDEN MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h, unsigned long long ticks,
-                              unsigned long long n);
+MW_HIDDEN MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h);
 
 /* The event indicators at state x (current u, p, m) into z; 0 on success. */
 MW_HIDDEN int mw_events(MwInstance *inst, const double *x, double *z);
@@ -279,6 +280,8 @@ MW_HIDDEN const char *mw_event_update(MwInstance *inst, int *x_changed);
 
 /* The argument checks of both wrappers (fn: the calling FMI function, named in every message). */
 /* Log an error, enter the error mode, return MW_ERROR. */
+/* NULL if value may be given to variable v (finite, within its [min, max]), else why (written into what[len]). */
+MW_HIDDEN const char *mw_value_problem(const MwVariable *v, double value, char *what, size_t len);
 MW_HIDDEN MwStatus mw_fail(MwInstance *inst, const char *fn, const char *what);
 /* Interfaces a call belongs to (mw_enter). */
 enum { MW_FOR_ANY = 0, MW_FOR_ME = 1, MW_FOR_CS = 2 };
