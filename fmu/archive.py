@@ -44,7 +44,7 @@ from model.limits import (
     MAX_FMU_TOTAL_BYTES,
 )
 
-__all__ = ["FmuArchiveError", "check_fmu_archive", "MODEL_DESCRIPTION"]
+__all__ = ["FmuArchiveError", "check_fmu_archive", "model_description_xml", "MODEL_DESCRIPTION"]
 
 #: The one member every FMU has.
 MODEL_DESCRIPTION = "modelDescription.xml"
@@ -148,3 +148,16 @@ def check_fmu_archive(fmu_path: str | os.PathLike[str]) -> None:
                               "entities could read other files or expand without bound") from None
     except ParseError as exc:
         raise FmuArchiveError(f"{path}: {MODEL_DESCRIPTION} is not well-formed XML: {exc}") from None
+
+
+def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
+    """The ``modelDescription.xml`` of an FMU, after :func:`check_fmu_archive`.
+
+    Raises
+    ------
+    FmuArchiveError
+        A ValueError naming the file: not an FMU, or an archive that breaks a limit.
+    """
+    check_fmu_archive(fmu_path)
+    with zipfile.ZipFile(fmu_path) as zf:
+        return zf.read(MODEL_DESCRIPTION)

@@ -16,14 +16,13 @@ column ``tau_m`` and the array outputs are split back into their elements.
 from __future__ import annotations
 
 import os
-import zipfile
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
-from .archive import check_fmu_archive
+from .archive import check_fmu_archive, model_description_xml
 
 __all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names", "fmi_version"]
 
@@ -52,9 +51,7 @@ def fmi_version(fmu_path: str | os.PathLike[str]) -> int:
     """
     from defusedxml.ElementTree import fromstring  # no entities, no external references
 
-    check_fmu_archive(fmu_path)
-    with zipfile.ZipFile(fmu_path) as zf:
-        root = fromstring(zf.read("modelDescription.xml"))
+    root = fromstring(model_description_xml(fmu_path))
     return 3 if str(root.get("fmiVersion", "")).startswith("3.") else 2
 
 

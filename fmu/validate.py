@@ -36,7 +36,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .archive import MODEL_DESCRIPTION, check_fmu_archive
+from .archive import check_fmu_archive, model_description_xml
 from model.errors import InputError
 from model.limits import MAX_SAMPLES
 
@@ -253,19 +253,6 @@ def _other_platforms(zf: zipfile.ZipFile, carried: dict[str, str], host: str, tm
         problems += [f"{carried[target.name]} ({target.name}): {p}" for p in found.problems]
     facts["structure"] = f"checked with llvm-objdump: {', '.join(p.name for p in others)}"
     return problems
-
-
-def model_description_xml(fmu_path: str | os.PathLike[str]) -> bytes:
-    """The ``modelDescription.xml`` of an FMU, after :func:`~fmu.archive.check_fmu_archive`.
-
-    Raises
-    ------
-    fmu.archive.FmuArchiveError
-        A ValueError naming the file: not an FMU, or an archive that breaks a limit.
-    """
-    check_fmu_archive(fmu_path)
-    with zipfile.ZipFile(fmu_path) as zf:
-        return zf.read(MODEL_DESCRIPTION)
 
 
 def _robot_node(fmu_path: str | os.PathLike[str]) -> ET.Element | None:
