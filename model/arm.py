@@ -44,6 +44,9 @@ class KinematicArm(Protocol):
     def jacob0(self, q: Any) -> np.ndarray:
         """Geometric Jacobian J_0 (6, n) expressed in the world frame."""
 
+    def fkine_batch(self, Q: Any) -> np.ndarray:
+        """Poses T_0E (N, 4, 4) of N joint vectors given as an (N, n) array, m."""
+
 
 class DynamicArm(KinematicArm, Protocol):
     """A :class:`KinematicArm` with symbolic kinematics, dynamics and gears: what the plant and linearise use."""
