@@ -39,7 +39,7 @@ from typing import Any, Iterator, Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .errors import InputError, closest
+from .errors import InputError, closest, did_you_mean
 from .limits import MAX_JOINTS, MAX_WAYPOINTS
 
 __all__ = [
@@ -366,10 +366,8 @@ def _check_keys(w: _Where, link: int | None, data: Mapping[str, Any], required: 
                                                                     f"'{prefix}{typo}' = {data[typo]!r}: did you mean "
                                                                     f"'{prefix}{key}'?)")))
     for key in unknown:
-        guess = closest(key, absent)
-        hint = f"; did you mean {guess!r}?" if guess is not None else ""
         w.problems.append(str(w.fail(link, prefix + key, data[key],
-                                     f"{what} ({', '.join(known)}); this key is unknown{hint}")))
+                                     f"{what} ({', '.join(known)}); this key is unknown{did_you_mean(key, absent)}")))
 
 
 def _inertia(w: _Where, link: int, value: Any, note: str | None = None) -> tuple[float, ...]:
@@ -630,10 +628,8 @@ def description_from_dict(data: Mapping[str, Any], path: str = "") -> RobotDescr
     """
     w = _Where(path)
     desc = None
-    try:
+    with w.collect():  # a problem that stops the checks: reported after those found so far
         desc = _description(w, data, path)
-    except RobotDescriptionError as exc:  # a problem that stops the checks: report it after those found so far
-        w.problems.extend(exc.problems)
     w.raise_problems()
     assert desc is not None
     return desc

@@ -18,7 +18,7 @@ from __future__ import annotations
 import difflib
 from typing import Any, Iterable, Sequence
 
-__all__ = ["InputError", "NumericalError", "ToolchainError", "WorkbenchError", "closest"]
+__all__ = ["InputError", "NumericalError", "ToolchainError", "WorkbenchError", "closest", "did_you_mean"]
 
 
 class WorkbenchError(Exception):
@@ -75,3 +75,9 @@ def closest(word: str, known: Iterable[str]) -> str | None:
     """
     found = difflib.get_close_matches(word, list(known), n=1)
     return found[0] if found else None
+
+
+def did_you_mean(word: str, known: Iterable[str]) -> str:
+    """``"; did you mean 'alpha'?"`` for the :func:`closest` entry of ``known``, or ``""`` if none is close."""
+    guess = closest(word, known)
+    return f"; did you mean {guess!r}?" if guess is not None else ""

@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .description import BUILTIN_DIR, BUILTIN_ROBOTS, RobotDescription, RobotDescriptionError, description_from_dict
-from .errors import closest
+from .errors import did_you_mean
 from .limits import load_toml
 from .urdf import description_from_urdf, description_from_urdf_toml
 
@@ -26,8 +26,7 @@ def load_description(name_or_path: str | Path) -> RobotDescription:
         if path.is_dir():
             raise RobotDescriptionError(f"{path}: is a directory: expected a built-in robot name or a robot TOML or URDF file")
         if not path.is_file():
-            guess = closest(text_name, BUILTIN_ROBOTS) if not path.suffix and len(path.parts) == 1 else None
-            hint = f"; did you mean {guess!r}?" if guess is not None else ""
+            hint = did_you_mean(text_name, BUILTIN_ROBOTS) if not path.suffix and len(path.parts) == 1 else ""
             raise RobotDescriptionError(
                 f"robot {text_name!r}: expected a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a TOML file path; "
                 f"no such file{hint}"

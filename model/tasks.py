@@ -36,7 +36,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .description import InertiaConsistencyWarning, RobotDescription
-from .errors import InputError, closest
+from .errors import InputError, did_you_mean
 from .limits import MAX_WAYPOINTS, check_file, load_toml, read_bounded
 from .loading import load_description
 from .trajectory import Trajectory, via_points
@@ -282,8 +282,7 @@ def _read_toml(path: Path) -> dict[str, Any]:
     data = load_toml(path, "waypoint file", WaypointError)
     for key in data:  # an unknown key first: it is often the misspelt 'waypoints'
         if key not in _TOML_KEYS:
-            guess = closest(key, [k for k in _TOML_KEYS if k not in data])
-            hint = f"; did you mean {guess!r}?" if guess is not None else ""
+            hint = did_you_mean(key, [k for k in _TOML_KEYS if k not in data])
             raise WaypointError(f"{path}: unknown key {key!r}; expected one of {', '.join(_TOML_KEYS)}{hint}")
     if "waypoints" not in data:
         raise WaypointError(f"{path}: missing key 'waypoints' (a list of joint vectors)")

@@ -393,10 +393,8 @@ def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None 
     where = str(path if path is not None else urdf_path)
     w = _Where(where)
     desc = None
-    try:
+    with w.collect():  # the URDF or its chain is unusable: nothing further to check
         desc = _urdf_description(w, urdf_path, dict(data or {}))
-    except RobotDescriptionError as exc:  # the URDF or its chain is unusable: nothing further to check
-        w.problems.extend(exc.problems)
     w.raise_problems()
     assert desc is not None
     return desc
