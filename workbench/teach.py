@@ -29,8 +29,9 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
+from model.chain import joint_axes
 from model.errors import InputError
-from model.ik import NoClosedFormError, WorkspaceError
+from model.ik import WorkspaceError
 from model.tasks import finite_limits
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -147,20 +148,18 @@ def readout(robot: "Robot", q: Sequence[float]) -> Readout:
     elbow stretched, ``|sin theta2| < 0.05``); otherwise the singularity report at that
     ``tol`` (smallest singular value of the task Jacobian at most 5 % of the largest).
     """
-    from scipy.spatial.transform import Rotation
-
     from model.closed_form import closed_form_for, joint_values
+    from model.description import tr2rpy
 
     q = np.asarray(q, dtype=float)
     T = robot.fkine(q)
-    yaw, pitch, roll = Rotation.from_matrix(T[:3, :3]).as_euler("ZYX")
     report = robot.singularities(q, tol=NEAR_SINGULAR_TOL)
     form = closed_form_for(robot.description)
     if form is not None:
         near = tuple(form.singular_conditions(joint_values(robot.description, q), NEAR_SINGULAR_TOL))
     else:
         near = tuple(report.reasons[:1])
-    return Readout(q=q, T=T, rpy=np.array([roll, pitch, yaw]), manipulability=robot.manipulability(q),
+    return Readout(q=q, T=T, rpy=tr2rpy(T), manipulability=robot.manipulability(q),
                    task=report.task, near=near)
 
 
@@ -176,7 +175,7 @@ def format_pose(r: Readout, units: DisplayUnits) -> str:
 
 def joint_frames(robot: "Robot", T_links: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """World origin and unit axis of every joint, from the model's link frames ``T_links = fkine_all(q)``."""
-    from model.chain import build_chain, joint_axes
+    from model.chain import build_chain
 
     return joint_axes(build_chain(robot.description), T_links)
 
@@ -274,13 +273,11 @@ class TeachPage:
         self._replays = dict(replays or {})
         self._revolute = [lk.is_revolute for lk in robot.description.links]
         self._names = [lk.name or f"q{j + 1}" for j, lk in enumerate(robot.description.links)]
-        try:
-            from model.closed_form import require_closed_form
+        from model.chain import build_chain
+        from model.closed_form import closed_form_for
 
-            require_closed_form(robot.description)
-            self.closed_form = True
-        except NoClosedFormError:
-            self.closed_form = False
+        self.closed_form = closed_form_for(robot.description) is not None
+        self._chain = build_chain(robot.description)  # the joint axes of every frame drawn
         self._scale = self._length_scale()
         self._build_scene()
         self._build_gui()
@@ -320,7 +317,7 @@ class TeachPage:
         self._links.points = np.stack([origins[:-1], origins[1:]], axis=1)
         for handle, T in zip(self._frames, T_links):
             handle.position, handle.wxyz = T[:3, 3], _quat_wxyz(T[:3, :3])
-        for handle, (o, axis) in zip(self._joints, joint_frames(self.robot, T_links)):
+        for handle, (o, axis) in zip(self._joints, joint_axes(self._chain, T_links)):
             handle.position, handle.wxyz = o, _quat_wxyz(_z_to(axis))
         self._tool.position, self._tool.wxyz = T_tool[:3, 3], _quat_wxyz(T_tool[:3, :3])
 
