@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .args import UsageError
+from .args import UsageError, add_no_plots
 from .outputs import check_out_dir
 
 __all__ = ["register", "run_sweep"]
@@ -64,4 +64,4 @@ def register(subparsers: Any, full: bool = True) -> None:
                    help="interface of the embedded cluster (default 127.0.0.1; another one is reachable from the "
                         "network and warns)")
     p.add_argument("--resume", action="store_true", help="keep the cases an interrupted run of this spec wrote in DIR")
-    p.add_argument("--no-plots", action="store_true", help="write the table and summary only")
+    add_no_plots(p)

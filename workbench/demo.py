@@ -148,8 +148,8 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     files.append(write_json(out / "metrics.json", metrics))
 
     progress.step("a robustness sweep: computed torque over payload x friction, compiled loops on Dask")
-    files += sweep_section(report, out / "sweep", robot_name, plots=plots, rate_hz=rate_hz, bandwidth=bandwidth,
-                           note=progress.note, rel_to=out)
+    files += sweep_section(report, out, robot_name, plots=plots, rate_hz=rate_hz, bandwidth=bandwidth,
+                           note=progress.note)
 
     if gif:
         progress.step("animating the arm along the closed-loop motion")
