@@ -38,7 +38,7 @@ from model.dynamics.parameters import DynamicsParameters
 from model.dynamics.symbolic import accel_scaled_function
 from model.robot import Robot
 
-from .result import TrackingResult
+from .result import SATURATION_MARGIN, TrackingResult
 from .schedule import Schedule
 
 __all__ = ["KERNEL_SOURCE", "ClosedLoopKernel", "KernelRun", "closed_loop_kernel"]
@@ -46,7 +46,6 @@ __all__ = ["KERNEL_SOURCE", "ClosedLoopKernel", "KernelRun", "closed_loop_kernel
 #: The handwritten loop around the generated functions.
 KERNEL_SOURCE = Path(__file__).resolve().parent / "c" / "kernel.c"
 _N_METRICS = 5
-_SAT_MARGIN = 1 - 1e-12  # as TrackingResult.metrics: |tau| at (1 - 1e-12) of its limit counts as saturated
 
 _P = ctypes.c_void_p
 _ARGTYPES = [_P, _P, _P, _P, _P, _P, ctypes.c_double, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P]
@@ -177,7 +176,7 @@ class ClosedLoopKernel:
         dims = np.array([n, len(inputs), len(self.law.signals), self._state_index, int(delay), schedule.substeps,
                          steps], dtype=np.int64)
         G = np.ascontiguousarray(controller.G, dtype=np.float64)
-        tau_sat = None if controller.tau_m_max is None else np.ascontiguousarray(controller.tau_m_max * _SAT_MARGIN)
+        tau_sat = None if controller.tau_m_max is None else np.ascontiguousarray(controller.tau_m_max * SATURATION_MARGIN)
         refs = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q_ref, schedule.qd_ref, schedule.qdd_ref)]
         x0 = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q0, schedule.qd0)]
         scale = np.array([float(link_mass_scale)])

@@ -11,7 +11,7 @@ from typing import Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from .result import TrackingResult
+from .result import SATURATION_MARGIN, TrackingResult
 
 __all__ = ["MIN_SPAN", "tracking_error_plot", "torque_plot", "joint_plot"]
 
@@ -66,7 +66,7 @@ def torque_plot(result: TrackingResult, title: str = "", limit_sources: Sequence
             ax.axhline(limit, color="r", ls="--", lw=0.8, label=f"limit ±{limit:.4g} N m{source}")
             ax.axhline(-limit, color="r", ls="--", lw=0.8)
             if met.saturated_fraction[j] > 0:
-                at_limit = np.abs(result.tau_m[:, j]) >= limit * (1 - 1e-12)
+                at_limit = np.abs(result.tau_m[:, j]) >= limit * SATURATION_MARGIN
                 ax.fill_between(result.t, -limit, limit, where=at_limit, step="post", color="r", alpha=0.12, lw=0,
                                 label=f"at the limit {100 * met.saturated_fraction[j]:.1f} % of the time")
         ax.set_ylabel(f"{result.joints[j]}\ntau_m [N m]")

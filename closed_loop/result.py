@@ -7,7 +7,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TrackingMetrics", "TrackingResult"]
+__all__ = ["SATURATION_MARGIN", "TrackingMetrics", "TrackingResult"]
+
+#: A torque at (1 - 1e-12) of its limit or beyond counts as saturated (the clipped value, rounding forgiven).
+SATURATION_MARGIN = 1 - 1e-12
 
 
 @dataclass(frozen=True)
@@ -124,7 +127,7 @@ class TrackingResult:
         if self.tau_m_max is None:
             at_limit = np.zeros(self.tau_m.shape, dtype=bool)
         else:
-            at_limit = np.abs(self.tau_m) >= self.tau_m_max * (1 - 1e-12)
+            at_limit = np.abs(self.tau_m) >= self.tau_m_max * SATURATION_MARGIN
         runs = [_longest_run(at_limit[:, j]) for j in range(at_limit.shape[1])]
         dt = 1.0 / self.rate_hz
         return TrackingMetrics(

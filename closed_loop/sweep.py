@@ -98,13 +98,13 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     gains (``Kp``, ``Kd``, ``Ki``) with those of its own design (the other parameters of a design, its
     limits and feed-forward, do not depend on them).
     """
-    from control_design.design import design_robot
+    from control_design.design import DEFAULT_RATE_HZ, design_robot
     from control_design.loops import gains_arrays
 
     from .schedule import Schedule, default_substeps
 
     robot = setup.robot
-    rate = values.get("rate_hz", spec.rate_hz or 1000.0)
+    rate = values.get("rate_hz", spec.rate_hz or DEFAULT_RATE_HZ)
     bw = values.get("bandwidth", spec.bandwidth)
     zeta = values.get("damping", spec.damping)
 
@@ -149,6 +149,12 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     return controller, sched, p, mass_scale, delay, gains
 
 
+def _run_case(spec: SweepSpec, setup: _Setup, values: dict[str, float], record: bool = False) -> Any:
+    """The :class:`~closed_loop.kernel.KernelRun` of one case (its varied ``values`` by quantity)."""
+    controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, values)
+    return setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, record=record, values=gains)
+
+
 def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
     """(len(cases), 2 + 5 n) rows ``[max_error, diverged, per-joint metrics...]`` of ``cases`` (the Dask task)."""
     setup = case_setup(spec)
@@ -156,8 +162,7 @@ def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
     n = setup.robot.n
     rows = np.empty((len(cases), 2 + len(_METRICS) * n))
     for r, vals in enumerate(values):
-        controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, dict(zip(spec.quantities, vals)))
-        run = setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, values=gains)
+        run = _run_case(spec, setup, dict(zip(spec.quantities, vals)))
         per_joint = np.concatenate([run.max_error, run.rms_error, run.peak_motor_torque, run.peak_motor_velocity,
                                     run.saturated_fraction])
         if run.diverged:
@@ -170,18 +175,13 @@ def run_cases(spec: SweepSpec, cases: np.ndarray) -> np.ndarray:
 
 def nominal_run(spec: SweepSpec) -> Any:
     """The :class:`~closed_loop.kernel.KernelRun` of ``spec``'s design on the exact plant (nothing varied)."""
-    setup = case_setup(spec)
-    controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, {})
-    return setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, values=gains)
+    return _run_case(spec, case_setup(spec), {})
 
 
 def rerun_case(spec: SweepSpec, case: int) -> Any:
     """The samples of one case (a :class:`~closed_loop.result.TrackingResult`), re-run by the compiled loop."""
-    setup = case_setup(spec)
     vals = case_values(spec, np.array([case]))[0]
-    controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, dict(zip(spec.quantities, vals)))
-    run = setup.kernel.run(controller, sched, p, link_mass_scale=mass_scale, delay=delay, record=True, values=gains)
-    return run.result
+    return _run_case(spec, case_setup(spec), dict(zip(spec.quantities, vals)), record=True).result
 
 
 class SweepProgress:

@@ -41,6 +41,7 @@ import hashlib
 import json
 import math
 from dataclasses import asdict, dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -280,12 +281,19 @@ def case_values(spec: SweepSpec, cases: np.ndarray | None = None) -> np.ndarray:
         if spec.method == "random":
             u = np.array([np.random.default_rng(np.random.SeedSequence([spec.seed, int(i)])).random(d) for i in idx])
         else:
-            from scipy.stats import qmc
-
-            m = max(0, math.ceil(math.log2(N)))
-            u = qmc.Sobol(d, scramble=True, seed=spec.seed).random_base2(m)[:N][idx]
+            u = _sobol_design(d, spec.seed, max(0, math.ceil(math.log2(N))))[:N][idx]
         values = lows + (highs - lows) * u.reshape(len(idx), d)
     for j, q in enumerate(spec.vary):
         if q == "delay":
             values[:, j] = np.where(values[:, j] >= 0.5, 1.0, 0.0)
     return values.reshape(len(idx), d)
+
+
+@lru_cache(maxsize=4)
+def _sobol_design(d: int, seed: int, m: int) -> np.ndarray:
+    """The scrambled Sobol points (2**m, d) in [0, 1) of ``seed``, made once per process (every task reads it)."""
+    from scipy.stats import qmc
+
+    u = qmc.Sobol(d, scramble=True, seed=seed).random_base2(m)
+    u.flags.writeable = False
+    return u

@@ -82,7 +82,7 @@ int mw_closed_loop(mw_eval_fn accel, mw_work_fn accel_work, mw_eval_fn ctrl, mw_
     const int n = (int)dims[MW_N], n_ctrl_in = (int)dims[MW_N_CTRL_IN], n_sig = (int)dims[MW_N_SIGNALS];
     const int z_index = (int)dims[MW_STATE_INDEX], delay = (int)dims[MW_DELAY];
     const long long substeps = dims[MW_SUBSTEPS], steps = dims[MW_STEPS];
-    mw_call a, c;
+    mw_call a = {0}, c = {0}; /* zeroed: call_free is safe on a call whose init never ran */
     int status = call_init(&a, accel, accel_work, 5, 1);
     if (status == 0) status = call_init(&c, ctrl, ctrl_work, n_ctrl_in, z_index >= 0 ? 2 : 1);
     /* state, RK4 stages, controller buffers: 16 vectors of n */
