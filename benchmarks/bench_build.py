@@ -2,7 +2,7 @@
 
 Run as ``python -m benchmarks.bench_build`` (``--joints 2 7 12`` to choose the
 sizes, ``-N`` the states per batch). For each n, a seeded random standard-DH
-revolute chain (:func:`tests.chains.random_chain`: alternating parallel and
+revolute chain (:func:`tests.support.chains.random_chain`: alternating parallel and
 perpendicular axes, random masses, inertias and geared motors) is built in a
 fresh cache folder, then loaded again from the cache, then evaluated:
 
@@ -60,8 +60,8 @@ def measure(n: int, N: int, seed: int = 1) -> dict:
     """Build, load and time the n-joint random chain; one row of the table as a dict."""
     import pinocchio as pin
 
-    from tests.chains import random_chain
-    from tests.references import friction_reference, pinocchio_model
+    from tests.support.chains import random_chain
+    from tests.support.references import friction_reference, pinocchio_model
 
     desc = random_chain(n, seed)
     row: dict = {"n": n}
@@ -166,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         f"`python -m benchmarks.bench_build` on {platform.machine()}, {os.cpu_count()} CPUs, "
         f"{build_jobs()} parallel compiler processes, {version}; load average {load:.1f} at the start "
         f"(other work on the machine stretches wall times: compare the compiler CPU column). Random "
-        f"standard-DH revolute chains (`tests/chains.py`, seed 1), N = {args.N} states; Pinocchio loops on "
+        f"standard-DH revolute chains (`tests/support/chains.py`, seed 1), N = {args.N} states; Pinocchio loops on "
         f"{min(args.N, 5000)} states, its batched calls on one thread.",
         "",
         HEADER,

@@ -65,7 +65,7 @@ def compare_peers(name: str, N: int, rtb_states: int) -> None:
     """Our batch API against Pinocchio (Python loop) and RTB's batched rne on the same N states."""
     import pinocchio as pin
 
-    from tests.references import friction_reference, pinocchio_model, rtb_robot
+    from tests.support.references import friction_reference, pinocchio_model, rtb_robot
 
     robot = _load(name)
     n = robot.n
@@ -120,7 +120,7 @@ def compare_inertia_gravload(name: str, N: int, peer_states: int) -> None:
     """``inertia_batch`` and ``gravload_batch`` against RTB's batched ``inertia(Q)``/``gravload(Q)`` and Pinocchio loops."""
     import pinocchio as pin
 
-    from tests.references import pinocchio_model, rtb_robot, symmetric_from_upper
+    from tests.support.references import pinocchio_model, rtb_robot, symmetric_from_upper
 
     robot = _load(name)
     n = robot.n

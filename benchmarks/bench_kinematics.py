@@ -41,7 +41,7 @@ def _per_call(run, K: int) -> float:
 def compare(name: str, N: int, K: int, peer_states: int) -> None:
     import pinocchio as pin
 
-    from tests.references import pinocchio_model, rtb_robot
+    from tests.support.references import pinocchio_model, rtb_robot
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)

@@ -854,7 +854,7 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
 
     if fmi_version(fmu_path) == 3:
         report.notes.append("FMI 3.0: the FMU-state round trips, directional and adjoint derivatives and bad calls "
-                            "are checked by tests/test_fmu3.py, not here; libcosim imports FMI 2.0 only")
+                            "are checked by tests/fmu/test_fmi3.py, not here; libcosim imports FMI 2.0 only")
         return report
     _say(progress, "FMU state get/set and serialisation round trips")
     report.roundtrip = state_roundtrip(fmu_path, profile.at, tau_names, state_names + tool_names, step=step)
