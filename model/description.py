@@ -137,6 +137,10 @@ class LinkDescription:
         return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
 
 
+#: Joint names the URDF export gives its fixed joints (:mod:`model.urdf_export`).
+_RESERVED_JOINT_NAMES = frozenset({"base_joint", "flange_joint", "tool_joint"})
+
+
 @dataclass(frozen=True)
 class RobotDescription:
     """A serial arm: DH links, gravity and metadata; validated on construction."""
@@ -162,6 +166,15 @@ class RobotDescription:
     @property
     def n(self) -> int:
         return len(self.links)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """One name per joint, for files and tables: the links' names when every link has one, they are
+        unique and none is a name the URDF export reserves; else ``joint1`` .. ``jointN``."""
+        names = tuple(lk.name for lk in self.links)
+        if all(names) and len(set(names)) == len(names) and not _RESERVED_JOINT_NAMES & set(names):
+            return names
+        return tuple(f"joint{i}" for i in range(1, self.n + 1))
 
     @property
     def identifier(self) -> str:

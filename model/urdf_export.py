@@ -27,14 +27,6 @@ from .files import write_atomic
 __all__ = ["urdf_text", "companion_toml", "export_urdf"]
 
 
-def _joint_names(desc: RobotDescription) -> list[str]:
-    names = [lk.name for lk in desc.links]
-    reserved = {"base_joint", "flange_joint", "tool_joint"}
-    if all(names) and len(set(names)) == len(names) and not reserved & set(names):
-        return names
-    return [f"joint{i}" for i in range(1, desc.n + 1)]
-
-
 def urdf_text(desc: RobotDescription) -> str:
     """The URDF XML of ``desc``: links ``base_link``, ``link1``..``linkN``, ``flange`` (the tip), ``tool``
     if the description has one, ``world`` if it has a base pose; inertials and limits included."""
@@ -48,7 +40,7 @@ def urdf_text(desc: RobotDescription) -> str:
         links.insert(0, Link(name="world"))
         joints.append(Joint(name="base_joint", type="fixed", parent="world", child="base_link", origin=chain.base))
     parent = "base_link"
-    for i, (name, link) in enumerate(zip(_joint_names(desc), desc.links)):
+    for i, (name, link) in enumerate(zip(desc.joint_names, desc.links)):
         child = f"link{i + 1}"
         com = np.eye(4)
         com[:3, 3] = chain.com[i]
@@ -80,7 +72,7 @@ def _toml_number(x: float) -> str:
 def companion_toml(desc: RobotDescription, urdf_name: str) -> str:
     """A robot TOML pointing at ``urdf_name`` (relative to the TOML) that restores what URDF cannot hold:
     the name, gravity, rest pose and per-joint motor data."""
-    names = _joint_names(desc)
+    names = desc.joint_names
     lines = [f"# {desc.name} as URDF ({urdf_name}) plus what URDF cannot hold: gravity, rest pose and motor data.",
              "# Written by manip export-urdf. SI units: m, rad, kg, kg m^2, N m s/rad, N m (motor side).",
              f"name = {json.dumps(desc.name)}",
