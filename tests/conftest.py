@@ -3,8 +3,15 @@
 from __future__ import annotations
 
 import os
+import signal
 
 import pytest
+
+# A shell starts background jobs with SIGINT ignored, and an ignored signal stays ignored across exec: the
+# commands the tests interrupt with Ctrl-C (SIGINT) would then run to the end. A Python handler here is
+# reset to the default by exec, so every child process can be interrupted however pytest was started.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session", autouse=True)
