@@ -247,14 +247,15 @@ class Robot:
         return self.dynamics.accel(q, qd, tau, self._parameters if p is None else p, ws=ws)
 
     def linearise(self, q0: Any, qd0: Any = None, u0: Any = None,
-                  outputs: str | Sequence[str] | Any = "q") -> "control.StateSpace":
-        """Linear model about ``(q0, qd0, u0)`` as a ``control.StateSpace``; see :func:`model.linearise.linearise`.
+                  outputs: str | Sequence[str] | Any = "q", modes: Any = None) -> "control.StateSpace":
+        """Linear model about ``(q0, qd0, u0)`` as a ``control.StateSpace``, in the plant's friction ``modes``
+        (default sliding); see :func:`model.linearise.linearise`.
 
         The symbolic plant and its Jacobians are built on the first call and reused.
         """
         from .linearise import linearise
 
-        return linearise(self, q0, qd0, u0, outputs)
+        return linearise(self, q0, qd0, u0, outputs, modes)
 
     def inertia_batch(self, Q: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n, n) joint-space inertia B(q) at the N rows of the (N, n) array ``Q``, one compiled call."""

@@ -49,6 +49,9 @@ static const MwModel mw_model_data = {
     {$events, ${events}_work},
     {$update, ${update}_work},
     {$start, ${start}_work},
+    {$active, ${active}_work},
+    MW_NPIV,
+    {$pivots, ${pivots}_work},
 };
 
 const MwModel *mw_model(void) { return &mw_model_data; }

@@ -35,7 +35,7 @@ import numpy as np
 from ..description import RobotDescription
 from .lagrange import lagrange_model
 from .linalg import ldl_solve_sx
-from .motors import check_motor_model, friction_sx
+from .motors import check_motor_model, friction_sx, viscous_friction_sx
 from .newton_euler import rne_sx
 from .parameters import SymbolicParameters, parameter_layout, split_parameters
 
@@ -47,6 +47,7 @@ __all__ = [
     "build_functions",
     "build_lagrange_functions",
     "coriolis_ne_sx",
+    "plant_terms_sx",
 ]
 
 #: The Functions compiled for the numeric API (see :mod:`model.codegen`).
@@ -166,6 +167,23 @@ def accel_scaled_function(desc: RobotDescription, motor_model: str = "reflected"
     qdd = _accel_sx(desc, motor_model, s, scale)
     return ca.Function("accel_scaled", [s.q, s.qd, s.tau, s.p, scale], [ca.densify(ca.cse(qdd))],
                        ["q", "qd", "tau", "p", "link_mass_scale"], ["qdd"])
+
+
+def plant_terms_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX, params: SymbolicParameters,
+                   link_mass_scale: ca.SX | None = None) -> tuple[ca.SX, ca.SX]:
+    """The pieces of the plant's dynamics: ``(B, h)``.
+
+    ``B`` (n, n): the Newton-Euler inertia columns (their lower triangle is B's, as ``accel`` reads it);
+    ``h`` (n, 1): ``rne(q, qd, 0)`` without Coulomb friction (Coriolis, gravity and viscous
+    friction), the torque the stick-slip law of :mod:`model.dynamics.stick_slip` takes from ``G u``.
+    ``link_mass_scale``: as in :func:`accel_scaled_function`.
+    """
+    zero = ca.SX.zeros(desc.n, 1)
+    gear = np.array([lk.gear_ratio for lk in desc.links])
+    B_cols = _inertia_columns_ne(desc, motor_model, q, params, link_mass_scale)
+    rigid = rne_sx(desc, motor_model, q, qd, zero, params, with_friction=False, link_mass_scale=link_mass_scale)
+    h = rigid + ca.vertcat(*viscous_friction_sx(gear, qd, params.viscous_friction))
+    return B_cols, h
 
 
 def coriolis_ne_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX, params: SymbolicParameters,

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.friction_modes import V_EPS
-from fmu.reference import coulomb_limits, simulate_stick_slip
+from model.dynamics.stick_slip import V_EPS
+from tests.support.stick_slip_oracle import coulomb_limits, simulate_stick_slip
 from fmu.validate import TorqueProfile
 from model import InertiaConsistencyWarning, Robot
 from model.description import description_from_dict

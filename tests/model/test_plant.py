@@ -22,9 +22,11 @@ def test_contract_names_and_sizes(robot):
     plant = build_plant(robot)
     n = robot.n
     assert (plant.n, plant.nx, plant.nu, plant.ny) == (n, 2 * n, n, 3 * n + 6)
-    assert plant.ode.name() == "ode" and plant.out.name() == "out"
-    assert plant.ode.name_in() == ["x", "u", "p"] and plant.ode.name_out() == ["xdot"]
+    assert plant.ode.name() == "ode" and plant.out.name() == "out" and plant.nz == n
+    assert plant.ode.name_in() == ["x", "u", "p", "m"] and plant.ode.name_out() == ["xdot"]
     assert plant.out.name_in() == ["x", "u", "p"] and plant.out.name_out() == ["y"]
+    for name in ("events", "update", "start", "active", "pivots", "friction"):
+        assert getattr(plant, name).name_in() == ["x", "u", "p", "m"], name
     expected = (
         ["payload_mass"] + [f"payload_com[{k}]" for k in (1, 2, 3)] + [f"payload_inertia[{k}]" for k in range(1, 7)]
         + [f"viscous_friction[{i}]" for i in range(1, n + 1)]
@@ -48,7 +50,8 @@ def test_ode_and_out_values(robot):
     u = rng.uniform(-0.5, 0.5, n)
     x = np.concatenate([q, qd])
     p = plant.param_defaults
-    xdot = np.array(plant.ode(x, u, p)).ravel()
+    # in the sliding modes of qd, the plant's accelerations are the sign law of robot.accel
+    xdot = np.array(plant.ode(x, u, p, plant.sliding_modes(qd))).ravel()
     np.testing.assert_allclose(xdot[:n], qd)
     np.testing.assert_allclose(xdot[n:], robot.accel(q, qd, robot.gear_ratio * u), rtol=1e-12, atol=1e-12)
     y = np.array(plant.out(x, u, p)).ravel()

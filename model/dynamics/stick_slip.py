@@ -1,0 +1,149 @@
+"""The stick-slip friction law as CasADi expressions: modes, accelerations, event indicators, mode update.
+
+Each joint has a friction mode ``m``: ``+1`` sliding forward (Coulomb torque
+``Tc+ = |G| Tc+_m``, joint side), ``-1`` sliding backward (``Tc- = |G| Tc-_m``),
+``0`` stuck (``qd = 0``, ``qdd = 0``, friction = the holding torque, from the
+dynamics). With ``r = G u - h(q, qd)`` (``h``: Coriolis, gravity and viscous
+torques), the stuck mask ``s`` and the Coulomb torques ``f_c`` of the sliding
+joints, the free joints' accelerations solve the masked system::
+
+    M w = (1 - s) (r - f_c),   M = diag(1 - s) B diag(1 - s) + diag(s)
+
+(``M`` is positive definite with ``B``: one unpivoted LDL^T, as ``accel``), and
+``qdd = (1 - s) w``; a stuck joint's holding torque is ``f = r - B qdd`` in its
+row. The modes are frozen between events, so a Model Exchange integrator sees a
+smooth right-hand side. Event indicators, positive while the mode holds:
+
+* sliding: ``m qd + V_EPS`` (the velocity reaches zero, overshooting by at most ``V_EPS``);
+* stuck: ``min(Tc+ - f, f - Tc-) + F_EPS (Tc+ - Tc-)`` (the holding torque reaches a limit);
+* no Coulomb friction on the joint (``Tc+ - Tc- = 0``): ``1`` (it never sticks).
+
+One pass of the mode update: every sliding joint with ``m qd <= V_EPS`` that
+decelerates (``m qdd < -A_EPS (1 + max|qdd|)``) sticks, its velocity set to 0;
+if none does, the stuck joint whose holding torque exceeds its limit the most
+breaks loose towards that torque (the first of equal largest). The passes are
+repeated until nothing changes (``mw_plant_settle`` of ``plant_step.c``). The
+start modes are the signs of the velocities (a joint at rest starts stuck, then
+the update releases it if it cannot be held; a joint without Coulomb friction
+never starts stuck).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+
+from .linalg import ldl_pivots_sx, ldl_solve_sx
+
+__all__ = ["V_EPS", "F_EPS", "A_EPS", "ModeLaw", "stick_slip_sx"]
+
+#: Velocity overshoot allowed before a sliding joint's event, rad/s or m/s.
+V_EPS = 1e-6
+#: Relative margin of the holding torque beyond a limit before a stuck joint's event.
+F_EPS = 1e-9
+#: Relative deceleration below which a sliding joint at rest counts as turning back (sticks).
+A_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class ModeLaw:
+    """The law at one symbolic point ``(q, qd, u, p, m)``: every field an SX column.
+
+    Attributes
+    ----------
+    qd_held, qdd
+        (n,) the position derivative (``qd``, 0 for a stuck joint) and the accelerations.
+    friction
+        (n,) joint-side Coulomb torque of a sliding joint, holding torque of a stuck one, N m or N.
+    z
+        (n,) event indicators.
+    m_next, qd_next
+        (n,) modes and velocities after one pass of the update.
+    m_start
+        (n,) the modes to begin from.
+    active
+        (1,) 1 if a mode can change (a joint has Coulomb friction, or one is stuck), else 0.
+    pivots
+        (n,) the LDL^T pivots of ``M`` (a pivot that is not positive: B singular at that joint).
+    """
+
+    qd_held: ca.SX
+    qdd: ca.SX
+    friction: ca.SX
+    z: ca.SX
+    m_next: ca.SX
+    qd_next: ca.SX
+    m_start: ca.SX
+    active: ca.SX
+    pivots: ca.SX
+
+
+def _any(flags: list[Any]) -> Any:
+    out = flags[0]
+    for flag in flags[1:]:
+        out = ca.logic_or(out, flag)
+    return out
+
+
+def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m: ca.SX) -> ModeLaw:
+    """The stick-slip law (module docstring) from its symbolic pieces.
+
+    Parameters
+    ----------
+    B
+        (n, n) joint-space inertia; only its diagonal and lower triangle are read.
+    r
+        (n, 1) ``G u - h(q, qd)``: the joint torque left for acceleration and Coulomb friction, N m or N.
+    tc_pos, tc_neg
+        (n, 1) joint-side Coulomb torques ``Tc+ >= 0`` and ``Tc- <= 0``.
+    qd, m
+        (n, 1) joint velocities and friction modes.
+    """
+    n = m.numel()
+    stuck = [m[i] == 0 for i in range(n)]
+    f_c = [ca.if_else(m[i] > 0, tc_pos[i], ca.if_else(m[i] < 0, tc_neg[i], 0)) for i in range(n)]
+    M = ca.SX(n, n)
+    for i in range(n):
+        for j in range(i + 1):
+            M[i, j] = ca.if_else(stuck[i], 1, B[i, i]) if i == j else \
+                ca.if_else(ca.logic_or(stuck[i], stuck[j]), 0, B[i, j])
+    rhs = ca.vertcat(*[ca.if_else(stuck[i], 0, r[i] - f_c[i]) for i in range(n)])
+    w = ldl_solve_sx(M, rhs)
+    qdd = ca.vertcat(*[ca.if_else(stuck[i], 0, w[i]) for i in range(n)])
+    B_full = ca.tril(B) + ca.tril(B, False).T
+    held = r - B_full @ qdd
+    f = ca.vertcat(*[ca.if_else(stuck[i], held[i], f_c[i]) for i in range(n)])
+    qd_held = ca.vertcat(*[ca.if_else(stuck[i], 0, qd[i]) for i in range(n)])
+
+    has_c = [tc_pos[i] - tc_neg[i] > 0 for i in range(n)]
+    z = []
+    for i in range(n):
+        sliding = m[i] * qd[i] + V_EPS
+        hold = ca.fmin(tc_pos[i] - f[i], f[i] - tc_neg[i]) + F_EPS * (tc_pos[i] - tc_neg[i])
+        z.append(ca.if_else(has_c[i], ca.if_else(stuck[i], hold, sliding), 1))
+
+    a_tol = A_EPS * (1 + ca.mmax(ca.fabs(qdd)))
+    stick = [ca.logic_and(has_c[i], ca.logic_and(m[i] != 0, ca.logic_and(m[i] * qd[i] <= V_EPS,
+                                                                          m[i] * qdd[i] < -a_tol)))
+             for i in range(n)]
+    any_stick = _any(stick)
+    excess = [ca.if_else(stuck[i], ca.fmax(f[i] - tc_pos[i], tc_neg[i] - f[i]), -1e300) for i in range(n)]
+    m_next, qd_next = [], []
+    for i in range(n):
+        largest = excess[i] > 0
+        for j in range(n):
+            if j < i:
+                largest = ca.logic_and(largest, excess[i] > excess[j])
+            elif j > i:
+                largest = ca.logic_and(largest, excess[i] >= excess[j])
+        release = ca.if_else(f[i] > tc_pos[i], 1, -1)
+        mi = ca.if_else(any_stick, ca.if_else(stick[i], 0, m[i]), ca.if_else(largest, release, m[i]))
+        m_next.append(mi)
+        qd_next.append(ca.if_else(mi == 0, 0, qd[i]))
+
+    m_start = ca.vertcat(*[ca.if_else(has_c[i], ca.sign(qd[i]), ca.if_else(qd[i] < 0, -1, 1)) for i in range(n)])
+    active = ca.if_else(_any([*has_c, *stuck]), 1, 0)
+    return ModeLaw(qd_held=qd_held, qdd=qdd, friction=f, z=ca.vertcat(*z), m_next=ca.vertcat(*m_next),
+                   qd_next=ca.vertcat(*qd_next), m_start=m_start, active=ca.SX(active), pivots=ldl_pivots_sx(M))
