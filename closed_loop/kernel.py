@@ -200,13 +200,14 @@ class ClosedLoopKernel:
         status = self._fn(ctypes.cast(self._plant, _P), self._ctrl[0], self._ctrl[1], ptr(dims), ctrl_in,
                           float(schedule.dt), ptr(p), ptr(G), ptr(tau_sat), *(ptr(a) for a in refs),
                           *(ptr(a) for a in x0), ptr(metrics), *(ptr(a) for a in traj), ctypes.byref(last), ptr(fault))
+        # a failure in the period from t_k leaves last = k + 1 (the loop's counter moved on), one at the start 0
+        t_fail = float(schedule.t[min(max(int(last.value) - 1, 0), steps)])
         if status == 2:
             raise singular_dynamics_error(self.robot.description, int(fault[0]) - 1, fault[1:1 + n],
-                                          f"in the compiled closed loop at t = {schedule.t[int(last.value)]:g} s")
+                                          f"in the compiled closed loop, in the period from t = {t_fail:g} s")
         if status <= -10:
             raise NumericalError(f"closed-loop kernel {self.kind!r}: the plant's fixed-step rule failed: "
-                                 f"{PLANT_STATUS.get(status + 10, status + 10)} near t = "
-                                 f"{schedule.t[min(int(last.value), steps)]:g} s")
+                                 f"{PLANT_STATUS.get(status + 10, status + 10)} in the period from t = {t_fail:g} s")
         if status < 0:
             raise RuntimeError(f"closed-loop kernel {self.kind!r}: failed with status {status}")
         k = int(last.value)

@@ -154,7 +154,7 @@ class PlantRun:
         if status == _NONFINITE:
             raise NumericalError(f"{desc.name}: the plant's state left finite numbers at its start")
         raise NumericalError(f"{desc.name}: the plant's fixed-step rule failed: {PLANT_STATUS.get(status, status)} "
-                             f"(q = {np.array2string(self.x[:self.compiled.n], precision=6, separator=', ')})")
+                             f"(q = [{', '.join(f'{v:.6g}' for v in self.x[:self.compiled.n])}])")
 
 
 _COMPILED: "weakref.WeakKeyDictionary[Any, CompiledPlant]" = weakref.WeakKeyDictionary()

@@ -8,6 +8,7 @@ algorithms stay free functions that can be tested on their own.
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
@@ -55,7 +56,8 @@ class Robot:
     (:attr:`parameters`: payload, friction, gravity; the description's by
     default). :meth:`with_parameters` gives another Robot with other values
     that shares this one's compiled model; nothing changes a Robot's numbers
-    after it is made.
+    after it is made. Two Robots are equal when their descriptions (not the
+    path they were read from), motor models and parameters are.
     """
 
     def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
@@ -67,6 +69,18 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, n={self.n}, joints={self.description.joint_types!r}, motor_model={self.motor_model!r})"
+
+    def __eq__(self, other: object) -> bool:
+        """The same robot: equal descriptions (wherever they were read from), motor model and parameters."""
+        if not isinstance(other, Robot):
+            return NotImplemented
+        if other is self:
+            return True
+        return (self.motor_model == other.motor_model and self.parameters == other.parameters
+                and dataclasses.replace(self.description, path="") == dataclasses.replace(other.description, path=""))
+
+    def __hash__(self) -> int:
+        return hash((self.description.digest(), self.motor_model))
 
     # ------------------------------------------------------------------ basics
     @property

@@ -50,6 +50,6 @@ def singular_dynamics_error(description: Any, joint: int, q: Any, where: str = "
     at = f", {where}" if where else ""
     return SingularDynamicsError(
         f"{description.name}: the inertia matrix B(q) is singular at joint {joint + 1}{name}, "
-        f"q = {np.array2string(q, precision=6, separator=', ', max_line_width=10_000)}{at}: joint {joint + 1} "
+        f"q = [{', '.join(f'{v:.6g}' for v in q)}]{at}: joint {joint + 1} "
         "moves no mass and has no motor inertia there, so its acceleration is undefined",
         joint + 1, q)
