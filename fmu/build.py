@@ -304,17 +304,20 @@ def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
     else:
         xdot, y = spec.ode(x, u, p), spec.out(x, u, p)
         d_next = empty
+    xdot_sliding = modes.ode_sliding(x, u, p, m) if modes is not None else xdot  # unused without modes
     if modes is not None:
         z, (m_next, x_next) = modes.events(x, u, p, m), modes.update(x, u, p, m)
+        z_sliding = modes.events_sliding(x, u, p, m)
         m_start, active, pivots = modes.start(x, u, p, m), modes.active(x, u, p, m), modes.pivots(x, u, p, m)
     else:
-        z, m_next, x_next, m_start, active, pivots = empty, empty, x, empty, ca.SX(0), empty
+        z, z_sliding, m_next, x_next, m_start, active, pivots = empty, empty, empty, x, empty, ca.SX.zeros(2), empty
     wxdot, wy = ca.SX.sym("wxdot", xdot.numel()), ca.SX.sym("wy", y.numel())
     zz, dz = ca.vertcat(x, u, p), ca.vertcat(dx, du, dp)
     # ode, out and their derivatives take (x, u, p, m, d); the plant's rule functions (x, u, p, m)
     args, names = [x, u, p, m, d], ["x", "u", "p", "m", "d"]
     functions = [
         ca.Function(f"{fid}_ode", args, [xdot], names, ["xdot"]),
+        ca.Function(f"{fid}_ode_sliding", args, [xdot_sliding], names, ["xdot"]),
         ca.Function(f"{fid}_out", args, [y], names, ["y"]),
         ca.Function(f"{fid}_ode_dir", args + [dx, du, dp], [ca.jtimes(xdot, zz, dz)], names + ["dx", "du", "dp"],
                     ["dxdot"]),
@@ -324,6 +327,7 @@ def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
                     ["a"]),
         ca.Function(f"{fid}_out_adj", args + [wy], [ca.jtimes(y, zz, wy, True)], names + ["wy"], ["a"]),
         ca.Function(f"{fid}_events", args[:4], [z], names[:4], ["z"]),
+        ca.Function(f"{fid}_events_sliding", args[:4], [z_sliding], names[:4], ["z"]),
         ca.Function(f"{fid}_update", args[:4], [m_next, x_next], names[:4], ["m_next", "x_next"]),
         ca.Function(f"{fid}_start", args[:4], [m_start], names[:4], ["m_start"]),
         ca.Function(f"{fid}_active", args[:4], [active], names[:4], ["active"]),

@@ -439,11 +439,11 @@ class VariableTable:
             u_start=_c_array(np.zeros(len(spec.inputs))),
             p_start=_c_array(spec.p_start),
             step_start=_c_number(spec.step),
-            ode=f"{fid}_ode", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
+            ode=f"{fid}_ode", ode_sliding=f"{fid}_ode_sliding", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
             ode_adj=f"{fid}_ode_adj", out_adj=f"{fid}_out_adj", tick=f"{fid}_tick",
             d_start=_c_array(spec.discrete.start if spec.discrete is not None else np.zeros(0)),
             sample_period=_c_number(spec.discrete.period if spec.discrete is not None else 0.0),
-            events=f"{fid}_events", update=f"{fid}_update", start=f"{fid}_start", active=f"{fid}_active",
+            events=f"{fid}_events", events_sliding=f"{fid}_events_sliding", update=f"{fid}_update", start=f"{fid}_start", active=f"{fid}_active",
             pivots=f"{fid}_pivots",
         )
 

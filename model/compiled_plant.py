@@ -37,7 +37,7 @@ _PREFIX = "plant_"
 
 
 def plant_entry_points(library: CompiledLibrary, prefix: str) -> Any:
-    """The 12 addresses ``mw_plant_open`` takes (eval and work of each of :data:`STEP_FUNCTIONS`, named
+    """The 16 addresses ``mw_plant_open`` takes (eval and work of each of :data:`STEP_FUNCTIONS`, named
     ``prefix + name`` in ``library``), as a ctypes array."""
     addresses = [a for name in STEP_FUNCTIONS for a in library.entry_points(prefix + name)]
     return (_P * len(addresses))(*addresses)

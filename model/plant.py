@@ -9,11 +9,14 @@ The Functions, all pure SX and code-generatable::
 
     ode(x, u, p, m)      -> xdot        rigid-body dynamics, motors (reflected or full), payload,
                                         gravity, viscous friction, Coulomb friction of the modes
+    ode_sliding(...)     -> xdot        the same where no joint is stuck, bit for bit, without the masking
     out(x, u, p)         -> y           the outputs below
     events(x, u, p, m)   -> z           event indicators, > 0 while the modes hold
+    events_sliding(...)  -> z           the same where no joint is stuck, bit for bit, without holding torques
     update(x, u, p, m)   -> (m, x)      one pass of the mode update
     start(x, u, p, m)    -> m           the modes to begin from (m not read)
-    active(x, u, p, m)   -> a           1 if a mode can change, else 0 (no Coulomb friction, none stuck)
+    active(x, u, p, m)   -> [a, quiet]  a: 1 if a mode can change, else 0 (no Coulomb friction, none stuck);
+                                        quiet: 1 if an update pass would change nothing now
     pivots(x, u, p, m)   -> D           LDL^T pivots of the solve (not positive: B(q) singular there)
     friction(x, u, p, m) -> f           joint-side Coulomb (sliding) or holding (stuck) torque, N m or N
 
@@ -42,13 +45,14 @@ import numpy as np
 from .arm import DynamicArm
 from .dynamics.motors import coulomb_limits_sx
 from .dynamics.parameters import split_parameters
-from .dynamics.stick_slip import stick_slip_sx
+from .dynamics.stick_slip import sliding_accel_sx, sliding_indicators_sx, stick_slip_sx
 from .dynamics.symbolic import plant_terms_sx
 
 __all__ = ["Plant", "STEP_FUNCTIONS", "LINK_MASS_SCALE", "build_plant", "rpy_zyx_sx"]
 
 #: The Functions of the fixed-step rule, in the order ``mw_plant_open`` of ``plant_step.c`` takes them.
-STEP_FUNCTIONS: tuple[str, ...] = ("ode", "events", "update", "start", "active", "pivots")
+STEP_FUNCTIONS: tuple[str, ...] = ("ode", "ode_sliding", "events", "events_sliding", "update", "start", "active",
+                                   "pivots")
 #: The name of the extra parameter of a kernel plant (``build_plant(..., link_mass_scale=True)``).
 LINK_MASS_SCALE = "link_mass_scale"
 
@@ -66,7 +70,7 @@ class Plant:
         as the parameters' start values (:attr:`param_defaults`).
     n, nx, nu, nz
         Joints, states (2n), inputs (n) and friction modes (n).
-    ode, out, events, update, start, active, pivots, friction
+    ode, ode_sliding, out, events, events_sliding, update, start, active, pivots, friction
         The Functions of the module docstring.
     param_names, param_defaults, param_descriptions, param_units
         The parameter vector ``p`` (FMI-style 1-based names); the defaults are the robot's values.
@@ -85,8 +89,10 @@ class Plant:
     nu: int
     nz: int
     ode: ca.Function
+    ode_sliding: ca.Function
     out: ca.Function
     events: ca.Function
+    events_sliding: ca.Function
     update: ca.Function
     start: ca.Function
     active: ca.Function
@@ -152,8 +158,10 @@ def build_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> Plant:
     scale = p[layout.size] if link_mass_scale else None
     B, h = plant_terms_sx(desc, dyn.motor_model, q, qd, params, scale)
     tc_pos, tc_neg = coulomb_limits_sx(G, params.coulomb_friction_pos, params.coulomb_friction_neg)
-    law = stick_slip_sx(B, ca.DM(G) * u - h, tc_pos, tc_neg, qd, m)
+    r = ca.DM(G) * u - h
+    law = stick_slip_sx(B, r, tc_pos, tc_neg, qd, m)
     xdot = ca.vertcat(law.qd_held, law.qdd)
+    xdot_sliding = ca.vertcat(qd, sliding_accel_sx(B, r, tc_pos, tc_neg, m))
     T_WE = robot.kinematics.fkine(q)
     y = ca.vertcat(q, qd, ca.DM(G) * q, T_WE[0:3, 3], rpy_zyx_sx(T_WE[0:3, 0:3]))
 
@@ -191,8 +199,10 @@ def build_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> Plant:
         name=desc.identifier,
         n=n, nx=2 * n, nu=n, nz=n,
         ode=fn("ode", [xdot], ["xdot"]),
+        ode_sliding=fn("ode_sliding", [xdot_sliding], ["xdot"]),
         out=fn("out", [y], ["y"], (x, u, p), _ARGS[:3]),
         events=fn("events", [law.z], ["z"]),
+        events_sliding=fn("events_sliding", [sliding_indicators_sx(tc_pos, tc_neg, qd, m)], ["z"]),
         update=fn("update", [law.m_next, ca.vertcat(q, law.qd_next)], ["m_next", "x_next"]),
         start=fn("start", [law.m_start], ["m_start"]),
         active=fn("active", [law.active], ["active"]),

@@ -55,7 +55,7 @@ enum { MW_N, MW_N_CTRL_IN, MW_N_SIGNALS, MW_STATE_INDEX, MW_DELAY, MW_SUBSTEPS, 
 enum { MW_MAX_ERROR, MW_RMS_ERROR, MW_PEAK_TAU, MW_PEAK_QD_M, MW_SAT_FRACTION, MW_N_METRICS };
 
 /*
- * plant      the 12 addresses of the plant's generated functions (mw_plant_open of plant_step.h).
+ * plant      the 16 addresses of the plant's generated functions (mw_plant_open of plant_step.h).
  * dims       MW_N_DIMS integers: joints n, controller inputs, controller signal inputs (4 or 5: q, qd,
  *            q_d, qd_d[, qdd_d]), index of the controller state input z (-1: none), one-period delay
  *            (0/1), RK4 sub-steps per period, periods N.

@@ -42,7 +42,9 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     plant.nz = nz;
     plant.npiv = model->npiv;
     plant.ode = model->ode;
+    plant.ode_sliding = model->ode_sliding;
     plant.events = model->events;
+    plant.events_sliding = model->events_sliding;
     plant.update = model->update;
     plant.start = model->start;
     plant.active = model->active;
@@ -54,6 +56,7 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
         work_sizes(&model->ode_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->events, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        work_sizes(&model->events_sliding, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->update, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
         work_sizes(&model->active, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
@@ -364,7 +367,11 @@ int mw_directional(MwInstance *inst, int need_dxdot, int need_dy) {
 /* ------------------------------------------------------------------ modes */
 
 int mw_events(MwInstance *inst, const double *x, double *z) {
+    size_t i;
     set_args(inst, x);
+    /* the modes may have been set since the rule last looked (an FMU state restored): which function applies */
+    inst->call.any_stuck = 0;
+    for (i = 0; i < inst->model->nz; i++) inst->call.any_stuck |= inst->m[i] == 0.0;
     return mw_plant_events(&inst->call, x, z) == MW_PLANT_OK ? 0 : -1;
 }
 

@@ -109,6 +109,7 @@ typedef struct {
     double sample_period;         /* s: tick runs once per period; 0 when nd = 0 */
     const double *d_start;        /* nd */
     MwFunction ode;               /* (x, u, p, m, d) -> xdot */
+    MwFunction ode_sliding;       /* (x, u, p, m, d) -> xdot where no mode is 0: ode's numbers without the masking */
     MwFunction out;               /* (x, u, p, m, d) -> y */
     MwFunction ode_dir;           /* (x, u, p, m, d, dx, du, dp) -> dxdot, forward mode (d held) */
     MwFunction out_dir;           /* (x, u, p, m, d, dx, du, dp) -> dy, forward mode (d held) */
@@ -116,6 +117,7 @@ typedef struct {
     MwFunction out_adj;           /* (x, u, p, m, d, wy) -> [ax; au; ap] = J_out^T wy, reverse mode */
     MwFunction tick;              /* (x, u, p, d) -> d_next, once per sample period */
     MwFunction events;            /* (x, u, p, m) -> z, nz indicators, > 0 while the modes hold */
+    MwFunction events_sliding;    /* (x, u, p, m) -> z where no mode is 0: events' numbers, less work */
     MwFunction update;            /* (x, u, p, m) -> (m_next, x_next): one pass of the mode update */
     MwFunction start;             /* (x, u, p, m) -> m: the modes to begin from (m not read) */
     MwFunction active;            /* (x, u, p, m) -> 1 if a mode can change, else 0 */

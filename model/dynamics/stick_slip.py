@@ -37,7 +37,7 @@ import casadi as ca
 
 from .linalg import ldl_pivots_sx, ldl_solve_sx
 
-__all__ = ["V_EPS", "F_EPS", "A_EPS", "ModeLaw", "stick_slip_sx"]
+__all__ = ["V_EPS", "F_EPS", "A_EPS", "ModeLaw", "sliding_accel_sx", "sliding_indicators_sx", "stick_slip_sx"]
 
 #: Velocity overshoot allowed before a sliding joint's event, rad/s or m/s.
 V_EPS = 1e-6
@@ -64,7 +64,9 @@ class ModeLaw:
     m_start
         (n,) the modes to begin from.
     active
-        (1,) 1 if a mode can change (a joint has Coulomb friction, or one is stuck), else 0.
+        (2,) ``[active, quiet]``: active is 1 if a mode can change (a joint has Coulomb friction, or one is
+        stuck), else 0; quiet is 1 if one pass of the update would change nothing now (nothing stuck, no
+        sliding joint with Coulomb friction within ``V_EPS`` of rest), so the settle loop may skip it.
     pivots
         (n,) the LDL^T pivots of ``M`` (a pivot that is not positive: B singular at that joint).
     """
@@ -87,6 +89,32 @@ def _any(flags: list[Any]) -> Any:
     return out
 
 
+def sliding_accel_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, m: ca.SX) -> ca.SX:
+    """(n, 1) the accelerations of the law when no joint is stuck (every ``m_i`` is +-1): ``B^-1 (r - f_c)``.
+
+    The same operations as :func:`stick_slip_sx`'s ``qdd`` with the stuck mask all zero (its selections
+    then return their operands unchanged), so the two agree bit for bit wherever nothing is stuck; the
+    fixed-step rule uses this one there, which saves the masking.
+    """
+    n = m.numel()
+    f_c = _coulomb(tc_pos, tc_neg, m)
+    return ldl_solve_sx(B, ca.vertcat(*[r[i] - f_c[i] for i in range(n)]))
+
+
+def sliding_indicators_sx(tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m: ca.SX) -> ca.SX:
+    """(n, 1) the event indicators of the law when no joint is stuck: ``m qd + V_EPS``, 1 without Coulomb friction.
+
+    :func:`stick_slip_sx`'s ``z`` with the stuck mask all zero, bit for bit (its selections return the
+    sliding operand unchanged), without the holding torques a stuck joint's indicator needs.
+    """
+    return ca.vertcat(*[ca.if_else(tc_pos[i] - tc_neg[i] > 0, m[i] * qd[i] + V_EPS, 1) for i in range(m.numel())])
+
+
+def _coulomb(tc_pos: ca.SX, tc_neg: ca.SX, m: ca.SX) -> list[ca.SX]:
+    """The Coulomb torque of each joint's mode: ``Tc+`` sliding forward, ``Tc-`` backward, 0 stuck."""
+    return [ca.if_else(m[i] > 0, tc_pos[i], ca.if_else(m[i] < 0, tc_neg[i], 0)) for i in range(m.numel())]
+
+
 def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m: ca.SX) -> ModeLaw:
     """The stick-slip law (module docstring) from its symbolic pieces.
 
@@ -103,7 +131,7 @@ def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m
     """
     n = m.numel()
     stuck = [m[i] == 0 for i in range(n)]
-    f_c = [ca.if_else(m[i] > 0, tc_pos[i], ca.if_else(m[i] < 0, tc_neg[i], 0)) for i in range(n)]
+    f_c = _coulomb(tc_pos, tc_neg, m)
     M = ca.SX(n, n)
     for i in range(n):
         for j in range(i + 1):
@@ -144,6 +172,10 @@ def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m
         qd_next.append(ca.if_else(mi == 0, 0, qd[i]))
 
     m_start = ca.vertcat(*[ca.if_else(has_c[i], ca.sign(qd[i]), ca.if_else(qd[i] < 0, -1, 1)) for i in range(n)])
-    active = ca.if_else(_any([*has_c, *stuck]), 1, 0)
+    # quiet: nothing stuck, and no sliding joint with Coulomb friction within V_EPS of rest, so that one pass of the
+    # update (sticking needs m qd <= V_EPS, breaking loose a stuck joint) changes nothing
+    near_rest = [ca.logic_and(has_c[i], m[i] * qd[i] <= V_EPS) for i in range(n)]
+    quiet = ca.logic_not(_any([*stuck, *near_rest]))
+    active = ca.vertcat(ca.if_else(_any([*has_c, *stuck]), 1, 0), ca.if_else(quiet, 1, 0))
     return ModeLaw(qd_held=qd_held, qdd=qdd, friction=f, z=ca.vertcat(*z), m_next=ca.vertcat(*m_next),
-                   qd_next=ca.vertcat(*qd_next), m_start=m_start, active=ca.SX(active), pivots=ldl_pivots_sx(M))
+                   qd_next=ca.vertcat(*qd_next), m_start=m_start, active=active, pivots=ldl_pivots_sx(M))

@@ -82,6 +82,24 @@ def fmu_runs(puma, tour, designs, workdir):
     return {kind: closed_loop_through_fmu(puma, d, tour, workdir, controller_fmu=False) for kind, d in designs.items()}
 
 
+@pytest.fixture(scope="module")
+def kernel_runs(puma, tour, designs, python_runs):
+    runs = {}
+    for kind, d in designs.items():
+        controller = d.controller()
+        sched = Schedule.build(puma, tour, controller.dt, rate_hz=controller.rate_hz,
+                               substeps=python_runs[kind].substeps)
+        runs[kind] = closed_loop_kernel(puma, kind).run(controller, sched, puma.parameters, record=True)
+    return runs
+
+
+@pytest.fixture(scope="module")
+def me_runs(puma, tour, designs, fmu_runs, workdir):
+    """The plant FMU (exported by fmu_runs) in Model Exchange under CVode at rtol 1e-10."""
+    return {kind: run_closed_loop_me(workdir / "puma560.fmu", d.controller(), tour, plant=puma,
+                                     relative_tolerance=1e-10) for kind, d in designs.items()}
+
+
 def stuck(result):
     return result.qd == 0.0
 
@@ -104,11 +122,8 @@ def test_the_tour_sticks_and_slips_on_every_joint(puma, python_runs):
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_kernel_equals_the_python_loop(kind, puma, tour, designs, python_runs):
-    ref = python_runs[kind]
-    controller = designs[kind].controller()
-    sched = Schedule.build(puma, tour, controller.dt, rate_hz=controller.rate_hz, substeps=ref.substeps)
-    run = closed_loop_kernel(puma, kind).run(controller, sched, puma.parameters, record=True)
+def test_kernel_equals_the_python_loop(kind, kernel_runs, python_runs):
+    ref, run = python_runs[kind], kernel_runs[kind]
     assert not run.diverged
     assert np.max(np.abs(run.result.q - ref.q)) <= TOL
     np.testing.assert_array_equal(stuck(run.result), stuck(ref))
@@ -135,11 +150,8 @@ def test_libcosim_equals_the_python_loop_with_a_one_period_delay(kind, puma, tou
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_model_exchange_under_cvode_agrees_to_its_tolerance(kind, puma, tour, designs, python_runs, workdir,
-                                                            fmu_runs):
-    res = run_closed_loop_me(workdir / "puma560.fmu", designs[kind].controller(), tour, plant=puma,
-                             relative_tolerance=1e-10)
-    ref = python_runs[kind]
+def test_model_exchange_under_cvode_agrees_to_its_tolerance(kind, me_runs, python_runs):
+    res, ref = me_runs[kind], python_runs[kind]
     assert np.max(np.abs(res.q - ref.q)) <= TOL_ME
     np.testing.assert_array_equal(stuck(res), stuck(ref))
 
@@ -190,3 +202,107 @@ def test_a_sweeps_worst_case_rerun_through_the_plant_fmu_reproduces_its_max_erro
     assert abs(via_fmu.metrics().max_error.max() - worst["max_error"]) <= TOL
     others = result.table["max_error"].to_numpy()
     assert np.sort(others)[-2] < worst["max_error"] - 1e3 * TOL  # the cases differ: the worst one is told apart
+
+
+# The window of the PD tour in which joint 1 slides, sticks (2.975 s), breaks loose (3.141 s), slides and sticks
+# again (5.976 s), for the oracle and the figure.
+WINDOW = (2700, 6400)
+#: The oracle's own tolerance: solve_ivp (DOP853) at rtol 1e-11, atol 1e-12 per hold interval, amplified at most
+#: 1e3 times by the open-loop arm over the 3.7 s window (the validate-fmu divergence gain): 1e-8 rad (seen 6e-12).
+TOL_ORACLE = 1e-8
+
+
+@pytest.fixture(scope="module")
+def oracle_run(puma, python_runs):
+    """The test oracle (tests/support/stick_slip_oracle.py: the law written again in NumPy, events located by
+    solve_ivp) replaying the Python loop's torques over WINDOW open loop, from the Python loop's state there."""
+    from types import SimpleNamespace
+
+    from tests.support.stick_slip_oracle import simulate_stick_slip
+
+    ref = python_runs["pd"]
+    k0, k1 = WINDOW
+    profile = SimpleNamespace(t_switch=ref.t[k0:k1], tau_m=ref.tau_m[k0:k1], t_end=float(ref.t[k1]))
+    return simulate_stick_slip(puma, profile, x0=np.concatenate([ref.q[k0], ref.qd[k0]]), rtol=1e-11, atol=1e-12,
+                               samples_per_hold=1)
+
+
+def test_the_oracle_agrees_with_the_fixed_step_rule_to_its_tolerance(python_runs, oracle_run):
+    ref = python_runs["pd"]
+    k0, k1 = WINDOW
+    np.testing.assert_allclose(oracle_run.t, ref.t[k0:k1 + 1], rtol=0, atol=1e-12)
+    assert np.max(np.abs(oracle_run.X[:, :6] - ref.q[k0:k1 + 1])) <= TOL_ORACLE
+    assert np.max(np.abs(oracle_run.X[:, 6:] - ref.qd[k0:k1 + 1])) <= TOL_ORACLE
+    # joint 1 sticks, breaks loose and sticks again in the window, in the oracle's modes as in the rule's
+    modes = oracle_run.modes[:, 0]
+    assert intervals((modes == 0)[:, None])[0] == 2 and np.any(modes[(modes != 0)] != 0)
+    np.testing.assert_array_equal(modes == 0, ref.qd[k0:k1 + 1, 0] == 0)
+
+
+def test_the_figure_of_every_engine_on_the_stick_slip_window(python_runs, kernel_runs, fmu_runs, me_runs,
+                                                              oracle_run, tmp_path):
+    """docs/img/engines_stick_slip.png: joint 1's velocity in every engine around its two stick intervals of the
+    window, and every engine's difference to the Python loop over the window."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pathlib import Path
+
+    k0, k1 = WINDOW
+    ref = python_runs["pd"]
+    t = ref.t[k0:k1 + 1]
+    runs = [("Python loop (the rule through ctypes)", ref.q, ref.qd, dict(color="0.65", lw=5.0)),
+            ("compiled kernel (sweeps)", kernel_runs["pd"].result.q, kernel_runs["pd"].result.qd,
+             dict(color="tab:blue", lw=2.0, ls="--")),
+            ("plant FMU, Co-Simulation (FMPy)", fmu_runs["pd"].q, fmu_runs["pd"].qd,
+             dict(color="tab:orange", lw=1.5, ls=":")),
+            ("plant FMU, Model Exchange (CVode 1e-10)", me_runs["pd"].q, me_runs["pd"].qd,
+             dict(color="tab:green", lw=1.0)),
+            ("oracle (NumPy law, solve_ivp events)", None, None, dict(color="k", lw=0.8, ls="-."))]
+    series = []
+    for label, Q, QD, style in runs:
+        q1, qd1 = (oracle_run.X[:, 0], oracle_run.X[:, 6]) if Q is None else (Q[k0:k1 + 1, 0], QD[k0:k1 + 1, 0])
+        series.append((label, q1, qd1, style))
+    stuck_1 = ref.qd[k0:k1 + 1, 0] == 0
+    fig = plt.figure(figsize=(9, 6.8))
+    grid = fig.add_gridspec(2, 2, height_ratios=[1.0, 1.1])
+    zooms = [(2.90, 3.30), (5.90, 6.30)]
+    for col, (a, b) in enumerate(zooms):
+        ax = fig.add_subplot(grid[0, col])
+        sel = (t >= a) & (t <= b)
+        ax.fill_between(t[sel], 0, 1, where=stuck_1[sel], transform=ax.get_xaxis_transform(), color="tab:red",
+                        alpha=0.12, lw=0, label="joint 1 stuck (qd = 0 exactly)")
+        for label, _, qd1, style in series:
+            ax.plot(t[sel], qd1[sel], label=label, **style)
+        ax.set_xlim(a, b)
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel("qd[1] (rad/s)" if col == 0 else "")
+        ax.set_title(["slides, sticks, breaks loose", "sticks again, breaks loose"][col], fontsize=9)
+        if col == 0:
+            ax.legend(loc="upper right", fontsize=6.5)
+    ax_d = fig.add_subplot(grid[1, :])
+    ax_d.fill_between(t, 0, 1, where=stuck_1, transform=ax_d.get_xaxis_transform(), color="tab:red", alpha=0.12,
+                      lw=0)
+    floor = 1e-18
+    for label, q1, _, style in series[1:]:
+        diff = np.abs(q1 - ref.q[k0:k1 + 1, 0])
+        ax_d.semilogy(t, np.maximum(diff, floor), label=f"{label}: max {diff.max():.1e} rad",
+                      **{**style, "lw": min(max(style["lw"], 1.0), 2.0)})
+    for bound, text, at in ((TOL, "1e-9 rad: the fixed-step engines' bound", 0.45),
+                            (TOL_ME, "1e-7 rad: Model Exchange's bound", 1.6)):
+        ax_d.axhline(bound, color="tab:red", lw=0.8, ls="--")
+        ax_d.text(t[-1], bound * at, text, color="tab:red", fontsize=7, ha="right", va="top" if at < 1 else "bottom")
+    ax_d.set_ylim(floor / 3, 1e-5)
+    ax_d.set_xlim(t[0], t[-1])
+    ax_d.set_ylabel("|q[1] - Python loop's| (rad)\n1e-18 = bit for bit")
+    ax_d.set_xlabel("t (s)")
+    ax_d.legend(loc="center left", fontsize=7)
+    fig.suptitle("Puma 560 tour, PD at 1 kHz, Coulomb friction: one plant in every engine", fontsize=11)
+    fig.tight_layout()
+    docs = Path(__file__).resolve().parents[2] / "docs" / "img"
+    for folder in (tmp_path, docs):
+        fig.savefig(folder / "engines_stick_slip.png", dpi=90)
+    plt.close(fig)
+    assert (tmp_path / "engines_stick_slip.png").stat().st_size > 20_000

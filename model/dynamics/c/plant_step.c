@@ -11,15 +11,16 @@
 
 #include "plant_step.h"
 
-/* Scratch, in doubles: x0, stage, k1..k4 (6 nx), fault_x (nx), z0, z1 (2 nz), next (nz + nx), piv, value (1). */
+/* Scratch, in doubles: x0, stage, k1..k4 (6 nx), fault_x (nx), z0, z1 (2 nz), next (nz + nx), piv, value (2). */
 size_t mw_plant_scratch_size(const MwPlantFunctions *f) {
-    return 8 * f->nx + 3 * f->nz + f->npiv + 1;
+    return 8 * f->nx + 3 * f->nz + f->npiv + 2;
 }
 
 void mw_plant_bind_scratch(MwPlantCall *c, double *scratch) {
     c->scratch = scratch;
     c->fault_x = scratch + 6 * c->f->nx;
     c->active = 1;
+    c->any_stuck = 1;
     c->z_valid = 0;
     c->fault_joint = 0;
 }
@@ -37,7 +38,9 @@ static int raise_sizes(const MwFunction *fn, mw_int *sz_arg, mw_int *sz_res, mw_
 
 int mw_plant_work_sizes(const MwPlantFunctions *f, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
     if (raise_sizes(&f->ode, sz_arg, sz_res, sz_iw, sz_w) != 0) return -1;
-    if (f->nz > 0 && (raise_sizes(&f->events, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+    if (f->nz > 0 && (raise_sizes(&f->ode_sliding, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      raise_sizes(&f->events, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      raise_sizes(&f->events_sliding, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
                       raise_sizes(&f->update, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
                       raise_sizes(&f->start, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
                       raise_sizes(&f->active, sz_arg, sz_res, sz_iw, sz_w) != 0))
@@ -49,11 +52,10 @@ int mw_plant_work_sizes(const MwPlantFunctions *f, mw_int *sz_arg, mw_int *sz_re
 }
 
 static int all_finite(const double *v, size_t n) {
+    double zero = 0.0; /* 0 x a finite value is 0, 0 x inf or NaN is NaN: one test for the whole vector */
     size_t i;
-    for (i = 0; i < n; i++) {
-        if (!isfinite(v[i])) return 0;
-    }
-    return 1;
+    for (i = 0; i < n; i++) zero += 0.0 * v[i];
+    return zero == 0.0;
 }
 
 /* fn at state x, first output into out (and the second into out2 when not NULL). */
@@ -65,10 +67,12 @@ static int eval_at(MwPlantCall *c, const MwFunction *fn, const double *x, double
     return fn->eval(c->arg, c->res, c->iw, c->w, 0) == 0 ? MW_PLANT_OK : MW_PLANT_EVAL;
 }
 
-/* xdot at s into k; a derivative that is not finite records s as the fault state. */
+/* xdot at s into k (ode_sliding where no joint is stuck: the same numbers); a derivative that is not finite
+   records s as the fault state. */
 static int derivative(MwPlantCall *c, const double *s, double *k) {
     const size_t nx = c->f->nx;
-    if (eval_at(c, &c->f->ode, s, k, NULL) != 0) return MW_PLANT_EVAL;
+    const MwFunction *ode = c->f->nz > 0 && !c->any_stuck ? &c->f->ode_sliding : &c->f->ode;
+    if (eval_at(c, ode, s, k, NULL) != 0) return MW_PLANT_EVAL;
     if (all_finite(k, nx)) return MW_PLANT_OK;
     memcpy(c->fault_x, s, nx * sizeof(double));
     return MW_PLANT_NONFINITE;
@@ -97,7 +101,16 @@ static int rk4(MwPlantCall *c, double *x, double hs) {
 
 int mw_plant_events(MwPlantCall *c, const double *x, double *z) {
     if (c->f->nz == 0) return MW_PLANT_OK;
-    return eval_at(c, &c->f->events, x, z, NULL);
+    return eval_at(c, c->any_stuck ? &c->f->events : &c->f->events_sliding, x, z, NULL);
+}
+
+/* Whether a mode is 0 (a joint stuck). */
+static int any_zero(const double *m, size_t nz) {
+    size_t i;
+    for (i = 0; i < nz; i++) {
+        if (m[i] == 0.0) return 1;
+    }
+    return 0;
 }
 
 int mw_plant_settle(MwPlantCall *c, double *x, int *changed, int *x_changed) {
@@ -109,8 +122,9 @@ int mw_plant_settle(MwPlantCall *c, double *x, int *changed, int *x_changed) {
     if (x_changed != NULL) *x_changed = 0;
     if (nz == 0) return MW_PLANT_OK;
     if (eval_at(c, &c->f->active, x, value, NULL) != 0) return MW_PLANT_EVAL;
-    c->active = *value != 0.0;
-    if (!c->active) return MW_PLANT_OK;
+    c->active = value[0] != 0.0;
+    c->any_stuck = any_zero(c->m, nz);
+    if (!c->active || value[1] != 0.0) return MW_PLANT_OK; /* no mode can change, or none would now */
     for (pass = 0; pass < 2 * nz + 2; pass++) {
         int same_x;
         if (eval_at(c, &c->f->update, x, next, next + nz) != 0) return MW_PLANT_EVAL;
@@ -120,6 +134,7 @@ int mw_plant_settle(MwPlantCall *c, double *x, int *changed, int *x_changed) {
         if (changed != NULL) *changed = 1;
         memcpy(c->m, next, nz * sizeof(double));
         memcpy(x, next + nz, nx * sizeof(double));
+        c->any_stuck = any_zero(c->m, nz);
     }
     return MW_PLANT_UNSETTLED;
 }
@@ -255,11 +270,13 @@ MwPlantRun *mw_plant_open(long long nx, long long nz, long long npiv, void *cons
     run->f.nz = (size_t)nz;
     run->f.npiv = (size_t)npiv;
     run->f.ode = function_at(functions, 0);
-    run->f.events = function_at(functions, 1);
-    run->f.update = function_at(functions, 2);
-    run->f.start = function_at(functions, 3);
-    run->f.active = function_at(functions, 4);
-    run->f.pivots = function_at(functions, 5);
+    run->f.ode_sliding = function_at(functions, 1);
+    run->f.events = function_at(functions, 2);
+    run->f.events_sliding = function_at(functions, 3);
+    run->f.update = function_at(functions, 4);
+    run->f.start = function_at(functions, 5);
+    run->f.active = function_at(functions, 6);
+    run->f.pivots = function_at(functions, 7);
     run->call.f = &run->f;
     if (mw_plant_work_sizes(&run->f, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
         mw_plant_close(run);

@@ -10,8 +10,11 @@
  * The plant is a continuous-time system with nz discrete modes m (the friction mode of each
  * joint: +1 sliding forward, -1 sliding backward, 0 stuck; nz may be 0):
  *     xdot = ode(x, u, p, m),   z = events(x, u, p, m) (> 0 while the modes hold),
+ *     ode_sliding(x, u, p, m), events_sliding(x, u, p, m) (ode and events where no joint is stuck, bit for
+ *         bit, without the masking and the holding torques: the rule uses them while nothing is stuck),
  *     (m, x) <- update(x, u, p, m) (one pass), m <- start(x, u, p, m) (m not read),
- *     active(x, u, p, m) (1: a mode can change, else the modes are constant and events need no look),
+ *     active(x, u, p, m) -> [a, quiet] (a = 1: a mode can change, else the modes are constant and events need
+ *         no look; quiet = 1: one pass of the update would change nothing at this state, so none is made),
  *     D = pivots(x, u, p, m) (the LDL^T pivots of the matrix the accelerations are solved with;
  *         a pivot that is not positive is a singular inertia matrix at that joint).
  * Every function reads its inputs from the caller's argument vector: arg[0] is the state (set
@@ -69,10 +72,12 @@ typedef struct {
     size_t nz;         /* modes = event indicators (0: no modes; events, update, start, active unused) */
     size_t npiv;       /* pivots (0: no pivots function; a failure is then reported as non-finite) */
     MwFunction ode;    /* (x, u, p, m, ...) -> xdot */
+    MwFunction ode_sliding; /* (x, u, p, m, ...) -> xdot where no mode is 0 (nz = 0: unused, ode is used) */
     MwFunction events; /* (x, u, p, m) -> z */
+    MwFunction events_sliding; /* (x, u, p, m) -> z where no mode is 0 */
     MwFunction update; /* (x, u, p, m) -> (m_next, x_next) */
     MwFunction start;  /* (x, u, p, m) -> m */
-    MwFunction active; /* (x, u, p, m) -> 1 or 0 */
+    MwFunction active; /* (x, u, p, m) -> [active, quiet], 1 or 0 each */
     MwFunction pivots; /* (x, u, p, m) -> D */
 } MwPlantFunctions;
 
@@ -110,6 +115,7 @@ typedef struct {
     double *m;
     double *scratch;
     int active;
+    int any_stuck; /* a mode is 0: the sub-steps need ode's masking (set with active) */
     int z_valid; /* scratch holds the indicators at the current state (cleared by mw_plant_settle) */
     int fault_joint;
     double *fault_x;
@@ -148,9 +154,9 @@ int mw_plant_advance(MwPlantCall *c, double *x, double h, unsigned long long n);
 int mw_plant_diagnose(MwPlantCall *c);
 
 /*
- * A self-contained run for ctypes and the closed-loop kernel: the functions given as 12 addresses
- * (eval, work of ode, events, update, start, active, pivots; those of an absent function NULL when
- * nz = 0 or npiv = 0), with its own work memory. NULL when out of memory or a work query failed.
+ * A self-contained run for ctypes and the closed-loop kernel: the functions given as 16 addresses
+ * (eval, work of ode, ode_sliding, events, events_sliding, update, start, active, pivots; those of an absent function
+ * NULL when nz = 0 or npiv = 0), with its own work memory. NULL when out of memory or a work query failed.
  */
 typedef struct MwPlantRun MwPlantRun;
 MwPlantRun *mw_plant_open(long long nx, long long nz, long long npiv, void *const *functions);
