@@ -142,7 +142,7 @@ def build_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> Plant:
 
     With ``link_mass_scale`` the parameter vector gets one more entry, the factor on every link's mass
     and inertia (centres of mass, rotors and payload unchanged), so that one compiled plant serves a
-    sweep over link masses (:func:`model.dynamics.symbolic.accel_scaled_function`).
+    sweep over link masses (:func:`model.dynamics.symbolic.plant_terms_sx`).
     """
     n = robot.n
     desc = robot.description

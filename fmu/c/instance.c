@@ -16,17 +16,6 @@ static const char *const mw_category_names[MW_LOG_COUNT] = {
 
 static size_t at_least_one(size_t n) { return n > 0 ? n : 1; }
 
-static int work_sizes(const MwFunction *f, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
-    mw_int a = 0, r = 0, i = 0, w = 0;
-    if (f->work == NULL || f->eval == NULL) return -1;
-    if (f->work(&a, &r, &i, &w) != 0) return -1;
-    if (a > *sz_arg) *sz_arg = a;
-    if (r > *sz_res) *sz_res = r;
-    if (i > *sz_iw) *sz_iw = i;
-    if (w > *sz_w) *sz_w = w;
-    return 0;
-}
-
 MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *name, const MwHost *host,
                             int logging_on) {
     MwInstance *inst;
@@ -50,18 +39,12 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     plant.active = model->active;
     plant.pivots = model->pivots;
     if (mw_plant_work_sizes(&plant, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->ode_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->events, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->events_sliding, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->update, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->active, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->pivots, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->tick, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
+        mw_function_work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->ode_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->tick, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
         return NULL;
     }
     n_scratch = mw_plant_scratch_size(&plant);

@@ -25,7 +25,7 @@ void mw_plant_bind_scratch(MwPlantCall *c, double *scratch) {
     c->fault_joint = 0;
 }
 
-static int raise_sizes(const MwFunction *fn, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
+int mw_function_work_sizes(const MwFunction *fn, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
     mw_int a = 0, r = 0, i = 0, w = 0;
     if (fn->work == NULL || fn->eval == NULL) return -1;
     if (fn->work(&a, &r, &i, &w) != 0) return -1;
@@ -37,15 +37,15 @@ static int raise_sizes(const MwFunction *fn, mw_int *sz_arg, mw_int *sz_res, mw_
 }
 
 int mw_plant_work_sizes(const MwPlantFunctions *f, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
-    if (raise_sizes(&f->ode, sz_arg, sz_res, sz_iw, sz_w) != 0) return -1;
-    if (f->nz > 0 && (raise_sizes(&f->ode_sliding, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
-                      raise_sizes(&f->events, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
-                      raise_sizes(&f->events_sliding, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
-                      raise_sizes(&f->update, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
-                      raise_sizes(&f->start, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
-                      raise_sizes(&f->active, sz_arg, sz_res, sz_iw, sz_w) != 0))
+    if (mw_function_work_sizes(&f->ode, sz_arg, sz_res, sz_iw, sz_w) != 0) return -1;
+    if (f->nz > 0 && (mw_function_work_sizes(&f->ode_sliding, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      mw_function_work_sizes(&f->events, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      mw_function_work_sizes(&f->events_sliding, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      mw_function_work_sizes(&f->update, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      mw_function_work_sizes(&f->start, sz_arg, sz_res, sz_iw, sz_w) != 0 ||
+                      mw_function_work_sizes(&f->active, sz_arg, sz_res, sz_iw, sz_w) != 0))
         return -1;
-    if (f->npiv > 0 && raise_sizes(&f->pivots, sz_arg, sz_res, sz_iw, sz_w) != 0) return -1;
+    if (f->npiv > 0 && mw_function_work_sizes(&f->pivots, sz_arg, sz_res, sz_iw, sz_w) != 0) return -1;
     if (*sz_arg < 4) *sz_arg = 4;
     if (*sz_res < 2) *sz_res = 2;
     return 0;

@@ -39,6 +39,7 @@
 #else
 #define MW_PLANT_SYMBOL(name) name
 #endif
+#define mw_function_work_sizes MW_PLANT_SYMBOL(mw_function_work_sizes)
 #define mw_plant_work_sizes MW_PLANT_SYMBOL(mw_plant_work_sizes)
 #define mw_plant_scratch_size MW_PLANT_SYMBOL(mw_plant_scratch_size)
 #define mw_plant_bind_scratch MW_PLANT_SYMBOL(mw_plant_bind_scratch)
@@ -122,6 +123,8 @@ typedef struct {
     unsigned long long fault_substep; /* the 1-based sub-step of mw_plant_substeps that failed (0: none) */
 } MwPlantCall;
 
+/* Raise *sz_* to what one generated function needs (0 on success, -1 if it has none or its query failed). */
+int mw_function_work_sizes(const MwFunction *fn, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
 /* Raise *sz_* to what the plant's functions need (0 on success, -1 if a work query failed). */
 int mw_plant_work_sizes(const MwPlantFunctions *f, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
 /* Doubles of scratch an MwPlantCall needs. */
