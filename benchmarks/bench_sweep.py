@@ -8,7 +8,10 @@ motion at 1 kHz, SCARA) three ways in the same run, best of ``--repeat``:
 * ``python``: the Python loop :func:`closed_loop.simulate_tracking` (the peer the issue names);
 * ``fmu+fmu``: the plant FMU and the controller FMU through FMPy (:func:`closed_loop.run_closed_loop`).
 
-Targets: kernel <= 10 ms per run, >= 40x the Python loop and >= 10x the FMU master.
+Targets: kernel <= 10 ms per run, >= 10x the Python loop and >= 10x the FMU master. (The Python loop's plant
+is the kernel's own C rule since the one plant of ``model/plant.py``, called once per control period through
+ctypes; what the kernel saves over it is the Python controller and the per-period calls. Before, the Python
+loop integrated the plant in NumPy and the target was 40x.)
 It also times the sweep's per-case work (``run_cases``: a case's parameters, schedule and
 kernel run) on 1 and 2 threads of this process, which shows how much of it holds the GIL.
 
@@ -97,8 +100,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     for name, wall, ld in rows:
         say(f"{name:<9} {1e3 * wall:>10.2f} {1 / wall:>8.1f} {wall / kernel_s:>8.1f}x   {ld}")
     py, fm = rows[1][1] / kernel_s, rows[2][1] / kernel_s
-    met = kernel_s <= 0.010 and py >= 40 and fm >= 10
-    say(f"target: kernel <= 10 ms, >= 40x python, >= 10x fmu+fmu: {'met' if met else 'MISSED'} "
+    met = kernel_s <= 0.010 and py >= 10 and fm >= 10
+    say(f"target: kernel <= 10 ms, >= 10x python, >= 10x fmu+fmu: {'met' if met else 'MISSED'} "
         f"({1e3 * kernel_s:.2f} ms, {py:.0f}x, {fm:.0f}x)")
 
     spec = _spec(args.kind, 400)

@@ -23,7 +23,7 @@ from .controller_fmu import (CONTROLLER_FMU_KINDS, ControllerFmuReport, controll
                              export_controller_fmu, validate_controller_fmu)
 from .delay import OnePeriodDelay
 from .kernel import ClosedLoopKernel, KernelRun, closed_loop_kernel
-from .master import closed_loop_through_fmu, run_closed_loop, run_libcosim_closed_loop
+from .master import closed_loop_through_fmu, run_closed_loop, run_closed_loop_me, run_libcosim_closed_loop
 from .plots import joint_plot, torque_plot, tracking_error_plot
 from .progress import ProgressLine
 from .result import TrackingMetrics, TrackingResult
@@ -55,6 +55,7 @@ __all__ = [
     "joint_plot",
     "load_spec",
     "run_closed_loop",
+    "run_closed_loop_me",
     "run_libcosim_closed_loop",
     "simulate_tracking",
     "spec_from_dict",

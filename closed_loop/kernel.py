@@ -1,10 +1,11 @@
 """The compiled closed loop: one C call runs a whole :func:`~closed_loop.simulate.simulate_tracking`.
 
 One library per (robot, motor model, controller kind), built by the one pipeline
-(:func:`model.codegen.build_library`) and cached on disk: the plant's
-``accel_scaled(q, qd, tau, p, link_mass_scale)``
-(:func:`model.dynamics.symbolic.accel_scaled_function`, the Newton-Euler ``accel`` with
-the link masses and inertias times a scalar input), the law's
+(:func:`model.codegen.build_library`) and cached on disk: the plant's step functions
+(:mod:`model.plant`, built with ``link_mass_scale``: the link masses and inertias
+times a last parameter), the plant's fixed-step rule ``model/dynamics/c/plant_step.c``
+(the one the Python loop and the FMU run: RK4 sub-steps, stick-slip friction events
+located by bisection, the settle loop), the law's
 :func:`~control_design.laws.controller_function` (the same Function the Python
 controller runs) and the handwritten loop ``closed_loop/c/kernel.c``. Everything a
 sweep varies is an input, so one compiled kernel serves every case: the plant
@@ -14,10 +15,13 @@ controller's parameters (gains, limits, the model's ``p``), and the
 reference samples) with an optional one-period delay (as
 :class:`~closed_loop.delay.OnePeriodDelay`).
 
-The loop does the Python loop's arithmetic operation for operation (same RK4 form,
-same sub-steps, the schedule's reference arrays, ``-ffp-contract=off``), so the
-samples agree with :func:`~closed_loop.simulate.simulate_tracking` to rounding (the
-tests hold them to 1e-12). Metrics are accumulated in C during the run.
+The loop does the Python loop's arithmetic (the same rule in C, the same sub-steps,
+the schedule's reference arrays, ``-ffp-contract=off``), so the samples agree with
+:func:`~closed_loop.simulate.simulate_tracking` to rounding (the tests hold them to
+1e-12; the only difference is the link-mass scale, a multiplication by 1.0 where the
+Python loop's plant folds the masses into constants). Metrics are accumulated in C
+during the run. A plant without Coulomb friction (nothing stuck) skips the event
+indicators altogether: its cost is that of the plain RK4 loop.
 """
 
 from __future__ import annotations
@@ -32,10 +36,13 @@ import numpy as np
 from control_design.controllers import LawController
 from control_design.errors import DesignSpecError
 from control_design.laws import control_law, controller_function, law_fingerprint
-from model.codegen import CompiledLibrary, Progress, build_library
+from model.codegen import PLANT_STEP_SOURCES, CompiledLibrary, Progress, build_library
+from model.compiled_plant import PLANT_STATUS, plant_entry_points
 from model.dynamics.core import source_fingerprint
 from model.dynamics.parameters import DynamicsParameters
-from model.dynamics.symbolic import accel_scaled_function
+from model.dynamics.singular import singular_dynamics_error
+from model.errors import NumericalError
+from model.plant import STEP_FUNCTIONS, build_plant
 from model.robot import Robot
 
 from .result import SATURATION_MARGIN, TrackingResult
@@ -48,7 +55,8 @@ KERNEL_SOURCE = Path(__file__).resolve().parent / "c" / "kernel.c"
 _N_METRICS = 5
 
 _P = ctypes.c_void_p
-_ARGTYPES = [_P, _P, _P, _P, _P, _P, ctypes.c_double, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P]
+_ARGTYPES = [_P, _P, _P, _P, _P, ctypes.c_double, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P]
+_PLANT_PREFIX = "plant_"
 
 
 @dataclass(frozen=True)
@@ -103,17 +111,17 @@ class ClosedLoopKernel:
         self.function = controller_function(self.law)
         self.controller_name = self.function.name()
         key = (f"closed-loop kernel|{kind}|{n}|{law_fingerprint()}|{desc.digest()}|{robot.motor_model}"
-               f"|{source_fingerprint()}")
+               f"|{','.join(STEP_FUNCTIONS)}|{source_fingerprint()}")
         stem = f"kernel-{desc.identifier}-{robot.motor_model}-{kind}"
         self.library: CompiledLibrary
         self.library, self.build_info = build_library(
-            stem, key, lambda: [accel_scaled_function(desc, robot.motor_model), self.function],
-            progress=progress, extra_sources=(KERNEL_SOURCE,))
+            stem, key, lambda: [*build_plant(robot, link_mass_scale=True).step_functions(_PLANT_PREFIX), self.function],
+            progress=progress, extra_sources=(KERNEL_SOURCE, *PLANT_STEP_SOURCES))
         fn = self.library.symbol("mw_closed_loop")
         fn.restype = ctypes.c_int
         fn.argtypes = _ARGTYPES
         self._fn = fn
-        self._accel = self.library.entry_points("accel_scaled")
+        self._plant = plant_entry_points(self.library, _PLANT_PREFIX)
         self._ctrl = self.library.entry_points(self.controller_name)
         f = self.function
         self._in_names = [f.name_in(i) for i in range(f.n_in())]
@@ -147,6 +155,8 @@ class ClosedLoopKernel:
         ------
         control_design.errors.DesignSpecError
             A controller of another kind or joint count, a rate that is not the schedule's, a bad scale.
+        model.errors.SingularDynamicsError
+            B(q) is singular at a state the run reached (naming the joint, ``q`` and the time).
         """
         n = self.robot.n
         if getattr(controller, "kind", None) != self.kind or controller.n != n:
@@ -156,7 +166,7 @@ class ClosedLoopKernel:
             raise DesignSpecError(f"controller: its period {controller.dt:g} s is not the schedule's {schedule.dt:g} s")
         if not (np.isfinite(link_mass_scale) and link_mass_scale > 0):
             raise DesignSpecError(f"link_mass_scale: expected a factor > 0, got {link_mass_scale!r}")
-        p = self.robot.dynamics.check_parameters(plant_parameters).vector
+        p = np.append(self.robot.dynamics.check_parameters(plant_parameters).vector, float(link_mass_scale))
         own = controller.parameter_values()
         if values:
             unknown = [k for k in values if k not in own]
@@ -179,18 +189,25 @@ class ClosedLoopKernel:
         tau_sat = None if controller.tau_m_max is None else np.ascontiguousarray(controller.tau_m_max * SATURATION_MARGIN)
         refs = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q_ref, schedule.qd_ref, schedule.qdd_ref)]
         x0 = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q0, schedule.qd0)]
-        scale = np.array([float(link_mass_scale)])
         metrics = np.zeros((_N_METRICS, n))
+        fault = np.zeros(1 + 2 * n)
         traj = [np.empty((steps + 1, n)) for _ in range(3)] if record else [None, None, None]
         last = ctypes.c_longlong(0)
 
         def ptr(a: np.ndarray | None) -> int | None:
             return None if a is None else a.ctypes.data
 
-        h = schedule.dt / schedule.substeps
-        status = self._fn(self._accel[0], self._accel[1], self._ctrl[0], self._ctrl[1], ptr(dims), ctrl_in, h,
-                          ptr(p), ptr(scale), ptr(G), ptr(tau_sat), *(ptr(a) for a in refs), *(ptr(a) for a in x0),
-                          ptr(metrics), *(ptr(a) for a in traj), ctypes.byref(last))
+        status = self._fn(ctypes.cast(self._plant, _P), self._ctrl[0], self._ctrl[1], ptr(dims), ctrl_in,
+                          float(schedule.dt), ptr(p), ptr(G), ptr(tau_sat), *(ptr(a) for a in refs),
+                          *(ptr(a) for a in x0), ptr(metrics), *(ptr(a) for a in traj), ctypes.byref(last), ptr(fault))
+        # a failure in the period from t_k leaves last = k + 1 (the loop's counter moved on), one at the start 0
+        t_fail = float(schedule.t[min(max(int(last.value) - 1, 0), steps)])
+        if status == 2:
+            raise singular_dynamics_error(self.robot.description, int(fault[0]) - 1, fault[1:1 + n],
+                                          f"in the compiled closed loop, in the period from t = {t_fail:g} s")
+        if status <= -10:
+            raise NumericalError(f"closed-loop kernel {self.kind!r}: the plant's fixed-step rule failed: "
+                                 f"{PLANT_STATUS.get(status + 10, status + 10)} in the period from t = {t_fail:g} s")
         if status < 0:
             raise RuntimeError(f"closed-loop kernel {self.kind!r}: failed with status {status}")
         k = int(last.value)

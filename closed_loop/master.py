@@ -58,6 +58,7 @@ from .schedule import Schedule
 
 __all__ = [
     "run_closed_loop",
+    "run_closed_loop_me",
     "run_libcosim_closed_loop",
     "closed_loop_through_fmu",
 ]
@@ -331,6 +332,129 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                     inst.close()
     assert sched is not None
     return sched.result(plant_robot, kind, Q, QD, TAU, tau_m_max, wall)
+
+
+# ------------------------------------------------- Model Exchange master (CVode)
+
+class _HeldInputs:
+    """The ``input`` of FMPy's CVode solver: the torques are set once per control period, nothing in between."""
+
+    def apply(self, time: float, continuous: bool = True, discrete: bool = True, after_event: bool = False) -> None:
+        return None
+
+
+def _event_iteration(fmu: Any) -> None:
+    """``fmi2NewDiscreteStates`` until nothing changes (the friction modes settle in the FMU)."""
+    needed, terminate = True, False
+    while needed and not terminate:
+        needed, terminate, *_ = fmu.newDiscreteStates()
+    if terminate:
+        raise SimulationDivergedError("simulation: the plant FMU asked to terminate at an event")
+
+
+def run_closed_loop_me(plant_fmu: str | os.PathLike[str], controller: Controller, trajectory: Trajectory, *,
+                       plant: Robot | None = None, t_final: float | None = None, q0: Any = None, qd0: Any = None,
+                       relative_tolerance: float = 1e-10, progress: Progress | None = None) -> TrackingResult:
+    """The Python ``controller`` on the plant FMU in Model Exchange, integrated by CVode between control instants.
+
+    The schedule is :func:`run_closed_loop`'s (the torques computed at ``t_k`` are held over
+    ``[t_k, t_k+1]``); the plant FMU starts as there (its start modes settled with zero torque),
+    and at each ``t_k`` the master enters Event Mode, sets the torques, lets the FMU settle its
+    friction modes (``fmi2NewDiscreteStates``) and restarts FMPy's CVode (BDF, ``relative_tolerance``,
+    root finding on the FMU's event indicators: a joint that sticks or breaks loose is an event,
+    handled the same way). Without the fixed step, the run differs from the fixed-step engines
+    by their RK4 error only.
+
+    Parameters are those of :func:`run_closed_loop` (the Python controller only; no sub-steps).
+
+    Raises
+    ------
+    ValueError
+        Missing FMU, an FMU without Model Exchange, joint counts that differ.
+    control_design.errors.SimulationDivergedError
+        The FMU refused a call (its state became non-finite) or CVode failed.
+    """
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Model
+    from fmpy.sundials import CVodeSolver
+
+    plant_path = _existing(plant_fmu, "plant_fmu")
+    plant_robot = _plant_robot(plant_path, plant)
+    n = plant_robot.n
+    if controller.n != n:
+        raise ValueError(f"controller: expected {n} joints like plant {plant_robot.name!r}, got {controller.n}")
+    sched = Schedule.build(plant_robot, trajectory, controller.dt, rate_hz=controller.rate_hz, t_final=t_final,
+                           q0=q0, qd0=qd0, substeps=1)
+    check_fmu_archive(plant_path)
+    md = read_model_description(str(plant_path))
+    if md.modelExchange is None:
+        raise InputError(f"plant_fmu: {plant_path.name} has no Model Exchange interface")
+    nx, nz = md.numberOfContinuousStates, md.numberOfEventIndicators
+    vr = {v.name: int(v.valueReference) for v in md.modelVariables}
+    x_vr = [vr[f"q[{i + 1}]"] for i in range(n)] + [vr[f"qd[{i + 1}]"] for i in range(n)]
+    tau_vr = [vr[f"tau_m[{i + 1}]"] for i in range(n)]
+    start_values = {k: v for k, v in _plant_start_values(plant_robot, sched).items() if k != "internal_step"}
+    steps, t = sched.steps, sched.t
+    Q, QD, TAU = (np.empty((steps + 1, n)) for _ in range(3))
+    with tempfile.TemporaryDirectory(prefix="mw_master_me_") as work:
+        fmu = FMU2Model(guid=md.guid, unzipDirectory=extract(str(plant_path), unzipdir=work),
+                        modelIdentifier=md.modelExchange.modelIdentifier, instanceName="plant")
+        fmu.instantiate()
+        try:
+            fmu.setupExperiment(startTime=float(t[0]))
+            fmu.enterInitializationMode()
+            fmu.setReal([vr[k] for k in start_values], [float(v) for v in start_values.values()])
+            fmu.exitInitializationMode()
+            _event_iteration(fmu)
+            fmu.enterContinuousTimeMode()
+            solver = CVodeSolver(nx=nx, nz=nz, get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates,
+                                 get_dx=fmu.getDerivatives, get_z=fmu.getEventIndicators,
+                                 get_nominals=fmu.getNominalsOfContinuousStates, set_time=fmu.setTime,
+                                 input=_HeldInputs(), startTime=float(t[0]), maxStep=sched.dt,
+                                 relativeTolerance=relative_tolerance, maxNumSteps=100_000)
+            controller.reset()
+            Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
+            start = time.perf_counter()
+            for k in range(steps + 1):
+                x = np.array(fmu.getReal(x_vr))
+                Q[k], QD[k] = x[:n], x[n:]
+                tau_m = controller.update(float(t[k]), x[:n].copy(), x[n:].copy(), Reference(Qr[k], QDr[k], QDDr[k]))
+                TAU[k] = tau_m
+                if k == steps:
+                    break
+                fmu.enterEventMode()
+                fmu.setReal(tau_vr, [float(v) for v in tau_m])
+                _event_iteration(fmu)  # the friction modes follow the new torques
+                fmu.enterContinuousTimeMode()
+                solver.reset(float(t[k]))
+                tk, t_next = float(t[k]), float(t[k + 1])
+                while tk < t_next and not math.isclose(tk, t_next, rel_tol=1e-12, abs_tol=1e-15):
+                    state_event, _, tk = solver.step(tk, t_next)
+                    fmu.setTime(tk)
+                    step_event, terminate = fmu.completedIntegratorStep()
+                    if terminate:
+                        raise SimulationDivergedError(f"simulation: the plant FMU asked to terminate at t = {tk:g} s")
+                    if state_event or step_event:
+                        fmu.enterEventMode()
+                        _event_iteration(fmu)  # a joint sticks or breaks loose
+                        fmu.enterContinuousTimeMode()
+                        solver.reset(tk)
+                fmu.setTime(t_next)
+                if progress is not None:
+                    progress((k + 1) / steps, t_next, float(t[-1]))
+            wall = time.perf_counter() - start
+            del solver
+        except (FMICallException, RuntimeError) as exc:
+            raise SimulationDivergedError(f"simulation: the Model Exchange closed loop failed ({exc}) "
+                                          f"(controller {controller.kind!r})") from exc
+        finally:
+            try:
+                fmu.terminate()
+            except FMICallException:
+                pass  # an instance in error mode refuses fmi2Terminate; it is freed all the same
+            fmu.freeInstance()
+    return sched.result(plant_robot, controller.kind, Q, QD, TAU, controller.tau_m_max, wall)
 
 
 # ------------------------------------------------------------ libcosim master

@@ -24,6 +24,7 @@ import numpy as np
 
 from control_design.errors import DesignSpecError
 from model.arrays import as_joint_vector
+from model.dynamics.singular import singular_dynamics_error, singular_joint
 from model.limits import MAX_SAMPLES
 from model.robot import Robot
 from model.trajectory import Trajectory
@@ -43,10 +44,15 @@ def default_substeps(plant: Robot, dt: float, q0: np.ndarray, rate_factor: float
     ``lambda_friction`` is the largest eigenvalue of ``B(q0)^-1 diag(G^2 B_m)``, the plant's
     fastest open-loop decay rate (1/s), with the plant's friction parameters, times ``rate_factor``
     (a bound for a plant whose inertia is not ``plant``'s: ``1 / s`` for link masses scaled by ``s < 1``).
+    A singular ``B(q0)`` is a :class:`~model.errors.SingularDynamicsError` naming the joint.
     """
     G = plant.gear_ratio
     B_m = plant.parameters.viscous_friction
-    Binv_F = np.linalg.solve(plant.inertia(q0), np.diag(G * G * B_m))
+    B = plant.inertia(q0)
+    singular = singular_joint(B)
+    if singular is not None:
+        raise singular_dynamics_error(plant.description, singular[0], q0, "at the start of the closed loop")
+    Binv_F = np.linalg.solve(B, np.diag(G * G * B_m))
     lam = float(np.max(np.abs(np.linalg.eigvals(Binv_F)))) * rate_factor
     return max(1, math.ceil(dt / MAX_SUBSTEP - 1e-9), math.ceil(dt * lam / _STIFF_MARGIN - 1e-9))
 

@@ -1,8 +1,13 @@
-"""The Python closed loop: sampled controller, ZOH torque, RK4 plant (compiled dynamics).
+"""The Python closed loop: sampled controller in Python, ZOH torque, the plant's fixed-step rule in C.
 
 The timing, references, start state and sub-steps are those of
-:class:`~closed_loop.schedule.Schedule`; the plant ``qdd = accel(q, qd, G tau_m)``
-runs with the plant Robot's parameters in one explicit workspace.
+:class:`~closed_loop.schedule.Schedule`. The plant is the one plant of
+:mod:`model.plant` (its dynamics parameters, stick-slip friction modes
+included), advanced over each control period by the rule every engine runs
+(``model/dynamics/c/plant_step.c``: RK4 sub-steps, friction events located by
+bisection, the modes settled at each period's start), called through ctypes
+(:mod:`model.compiled_plant`). The run starts as an FMU leaves
+initialisation: the start modes settled with zero torque.
 """
 
 from __future__ import annotations
@@ -15,8 +20,7 @@ import numpy as np
 from control_design.controllers import Controller
 from control_design.errors import DesignSpecError, SimulationDivergedError
 from control_design.reference import Reference
-from model.codegen import CompilerNotFoundError
-from model.dynamics import Workspace
+from model.compiled_plant import compiled_plant
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -58,6 +62,10 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
         Joint counts that differ, bad times or start state.
     control_design.errors.SimulationDivergedError
         The state became non-finite.
+    model.errors.SingularDynamicsError
+        B(q) is singular at a state the run reached (naming the joint and ``q``).
+    model.codegen.CompilerNotFoundError
+        No C compiler: the plant's rule is compiled C.
     """
     n = plant.n
     if controller.n != n or trajectory.n != n:
@@ -67,44 +75,27 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
                            qd0=qd0, substeps=substeps)
     steps, t, substeps = sched.steps, sched.t, sched.substeps
     Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
-    q, qd = sched.q0.copy(), sched.qd0.copy()
-    h = sched.dt / substeps
-    G = plant.gear_ratio
-    p = plant.parameters
-    try:
-        ws: Workspace | None = plant.dynamics.workspace()
-    except CompilerNotFoundError:  # the dynamics evaluate with CasADi (warned once); no buffers to hold
-        ws = None
-    dyn_accel = plant.dynamics.accel  # compiled C
-
-    def accel(q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        return dyn_accel(q, qd, tau, p, ws=ws)
-
+    run = compiled_plant(plant).run(plant.parameters.vector)
+    run.start(np.concatenate([sched.q0, sched.qd0]))
+    x = run.x
     Q = np.empty((steps + 1, n))
     QD = np.empty((steps + 1, n))
     TAU = np.empty((steps + 1, n))
     controller.reset()
     start = time.perf_counter()
-    for k in range(steps + 1):
-        Q[k], QD[k] = q, qd
-        tau_m = controller.update(float(t[k]), q.copy(), qd.copy(), Reference(Qr[k], QDr[k], QDDr[k]))
-        TAU[k] = tau_m
-        if k == steps:
-            break
-        tau = G * tau_m
-        for _ in range(substeps):
-            a1 = accel(q, qd, tau)
-            q2, v2 = q + 0.5 * h * qd, qd + 0.5 * h * a1
-            a2 = accel(q2, v2, tau)
-            q3, v3 = q + 0.5 * h * v2, qd + 0.5 * h * a2
-            a3 = accel(q3, v3, tau)
-            q4, v4 = q + h * v3, qd + h * a3
-            a4 = accel(q4, v4, tau)
-            q = q + (h / 6.0) * (qd + 2.0 * v2 + 2.0 * v3 + v4)
-            qd = qd + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-            raise SimulationDivergedError(f"simulation: the closed loop diverged at t = {t[k + 1]:g} s (controller {controller.kind!r})")
-        if progress is not None:
-            progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+    try:
+        for k in range(steps + 1):
+            Q[k], QD[k] = x[:n], x[n:]
+            tau_m = controller.update(float(t[k]), Q[k].copy(), QD[k].copy(), Reference(Qr[k], QDr[k], QDDr[k]))
+            TAU[k] = tau_m
+            if k == steps:
+                break
+            if not run.advance(tau_m, sched.dt, substeps):
+                raise SimulationDivergedError(f"simulation: the closed loop diverged at t = {t[k + 1]:g} s "
+                                              f"(controller {controller.kind!r})")
+            if progress is not None:
+                progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+    finally:
+        run.close()
     wall = time.perf_counter() - start
     return sched.result(plant, controller.kind, Q, QD, TAU, controller.tau_m_max, wall)

@@ -45,7 +45,7 @@ from model.files import atomic_path, write_atomic
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
-           "nominal_run", "rerun_case", "run_cases", "summarise", "sweep"]
+           "nominal_run", "rerun_case", "rerun_case_through_fmu", "run_cases", "summarise", "sweep"]
 
 #: Folder (inside the output folder) of the finished tasks of a running or interrupted sweep.
 PARTS_DIR = ".sweep-parts"
@@ -98,7 +98,7 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     gains (``Kp``, ``Kd``, ``Ki``) with those of its own design (the other parameters of a design, its
     limits and feed-forward, do not depend on them).
     """
-    from control_design.design import DEFAULT_RATE_HZ, design_robot
+    from control_design.design import DEFAULT_RATE_HZ
     from control_design.loops import gains_arrays
 
     from .schedule import Schedule, default_substeps
@@ -109,9 +109,7 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     zeta = values.get("damping", spec.damping)
 
     def design(bandwidth: float | None, damping: float | None) -> Any:
-        kwargs = {} if bandwidth is None else {"bandwidth": bandwidth}
-        return design_robot(robot, spec.controller, damping=damping, rate_hz=rate, analyse=False,
-                            joint_model=setup.joint_model, **kwargs)
+        return _case_design(spec, setup, rate, bandwidth, damping)
 
     controller = setup.controllers.get(rate)
     if controller is None:
@@ -149,6 +147,15 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     return controller, sched, p, mass_scale, delay, gains
 
 
+def _case_design(spec: SweepSpec, setup: _Setup, rate: float, bandwidth: float | None, damping: float | None) -> Any:
+    """The design of a case: ``spec``'s controller kind on the sweep's robot at ``rate`` Hz, bandwidth and damping."""
+    from control_design.design import design_robot
+
+    kwargs = {} if bandwidth is None else {"bandwidth": bandwidth}
+    return design_robot(setup.robot, spec.controller, damping=damping, rate_hz=rate, analyse=False,
+                        joint_model=setup.joint_model, **kwargs)
+
+
 def _run_case(spec: SweepSpec, setup: _Setup, values: dict[str, float], record: bool = False) -> Any:
     """The :class:`~closed_loop.kernel.KernelRun` of one case (its varied ``values`` by quantity)."""
     controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, values)
@@ -182,6 +189,36 @@ def rerun_case(spec: SweepSpec, case: int) -> Any:
     """The samples of one case (a :class:`~closed_loop.result.TrackingResult`), re-run by the compiled loop."""
     vals = case_values(spec, np.array([case]))[0]
     return _run_case(spec, case_setup(spec), dict(zip(spec.quantities, vals)), record=True).result
+
+
+def rerun_case_through_fmu(spec: SweepSpec, case: int, workdir: str | Path) -> Any:
+    """One case re-run through the plant FMU (a :class:`~closed_loop.result.TrackingResult`): the case's plant
+    exported as it is (its payload and friction the FMU parameters' start values, its link masses scaled in
+    the exported description) and driven by the case's Python controller through FMPy (its one-period delay
+    included). The FMU integrates the plant the sweep's kernel does, with the same rule: its ``max_error`` is
+    the table's, to rounding. The FMU is written into ``workdir``.
+    """
+    from control_design.computed_torque import ModelMismatch, plant_with_mismatch
+    from fmu.build import export_fmu
+
+    from .delay import OnePeriodDelay
+    from .master import run_closed_loop
+
+    setup = case_setup(spec)
+    values = dict(zip(spec.quantities, case_values(spec, np.array([case]))[0]))
+    controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, values)
+    if gains is not None:  # the case's own design: its gains, the same limits and feed-forward
+        controller = _case_design(spec, setup, controller.rate_hz, values.get("bandwidth", spec.bandwidth),
+                                  values.get("damping", spec.damping)).controller(controller.rate_hz,
+                                                                                  saturate=spec.saturate)
+    robot = setup.robot
+    body = robot if mass_scale == 1.0 else plant_with_mismatch(robot, ModelMismatch(link_mass_scale=mass_scale))
+    plant = body.with_parameters(p)
+    folder = Path(workdir)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = export_fmu(plant, folder / f"{robot.description.identifier}_case{case}.fmu", step=sched.dt)
+    return run_closed_loop(path, OnePeriodDelay(controller) if delay else controller, setup.trajectory, plant=plant,
+                           substeps=sched.substeps)
 
 
 class SweepProgress:

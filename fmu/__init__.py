@@ -17,7 +17,6 @@ from .simulate import SimulationResult, simulate_cs, simulate_me, step_input
 from .validate import ValidationReport, validate_fmu
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 from .export_checks import SingularInertiaError, check_inertia
-from .reference import StickSlipResult, simulate_stick_slip
 
 __all__ = [
     "PLATFORMS",
@@ -26,9 +25,7 @@ __all__ = [
     "platform_folder",
     "resolve_platforms",
     "SingularInertiaError",
-    "StickSlipResult",
     "check_inertia",
-    "simulate_stick_slip",
     "CosimError",
     "FmuArchiveError",
     "CosimResult",

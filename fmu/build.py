@@ -38,12 +38,12 @@ from typing import Any, Callable, Sequence
 
 import casadi as ca
 
-from model.codegen import generate_c
+from model.codegen import PLANT_STEP_SOURCES, generate_c
 from model.errors import InputError, ToolchainError
 from model.files import atomic_path
 
 from .cross import CASADI_CFLAGS, CFLAGS, CrossCompileError, compiler_for, place_binaries
-from .platforms import Platform, UnsupportedHostError, host_platform, platform_folder
+from .platforms import Platform, UnsupportedHostError, host_platform, platform_folder, resolve_platforms
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
 __all__ = [
@@ -124,28 +124,36 @@ def _say(progress: Progress | None, message: str) -> None:
 # ------------------------------------------------------------------ public API
 
 def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float = 1e-3,
-               motor_model: str = "reflected", fmi_version: int = 2, platforms: Sequence[Platform] | None = None,
-               progress: Progress | None = None) -> Path:
-    """Export a robot as an FMI 2.0 or 3.0 FMU for Model Exchange and Co-Simulation.
+               motor_model: str | None = None, fmi_version: int = 2,
+               platforms: str | Sequence[str | Platform] | None = None, progress: Progress | None = None) -> Path:
+    """Export a robot, as it is, as an FMI 2.0 or 3.0 FMU for Model Exchange and Co-Simulation.
+
+    The FMU is built from the robot's plant (:func:`model.plant.build_plant`) and nothing else: its
+    motor model is the robot's, its parameters (payload, friction, gravity) are the FMU parameters'
+    start values, and the robot is recorded whole in ``resources/robot.json``, so that reading the
+    FMU back (:func:`fmu.validate.reload_fmu_robot`) gives a robot equal to ``robot``.
 
     Parameters
     ----------
     robot_or_name
-        A :class:`model.Robot`, a built-in robot name or a TOML path.
+        A :class:`model.Robot` (exported as it is), a built-in robot name or a TOML path.
     path
         Where to write the ``.fmu``; parent folders are created.
     step
         Internal step of the co-simulation integrator (RK4), s; the FMU's
         fixed parameter ``internal_step`` and its default experiment step.
     motor_model
-        ``"reflected"`` or ``"full"`` (see :class:`model.Robot`).
+        For a name or path: ``"reflected"`` (default) or ``"full"`` (see :class:`model.Robot`). For a
+        Robot it may only repeat the robot's own (a Robot is exported as it is).
     fmi_version
         2 (FMI 2.0, scalar variables, ``binaries/linux64``) or 3 (FMI 3.0, array
         variables ``q``, ``qd``, ``tau_m`` ..., adjoint derivatives, ``binaries/x86_64-linux``).
     platforms
-        Rows of :data:`fmu.platforms.PLATFORMS` to build binaries for (the host's
-        is always built); default the host's only. Cross platforms need the
-        ``ziglang`` package (:func:`fmu.cross.buildable_platforms`).
+        The platforms to build binaries for, as the CLI's ``--platforms`` takes them: names
+        (``"host"``, ``"linux64"``, ``"win64"``, ``"darwin64"``, ``"x86_64-windows"``, ...; a comma
+        list or a sequence) or rows of :data:`fmu.platforms.PLATFORMS`. The host's is always
+        built; default the host's only. Cross platforms need the ``ziglang`` package
+        (:func:`fmu.cross.buildable_platforms`).
     progress
         Called with one line per build stage and platform (the CLI prints them on stderr).
 
@@ -156,34 +164,34 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
 
     Raises
     ------
-    ValueError
-        Bad step or motor model, unknown robot; :class:`fmu.export_checks.SingularInertiaError`
-        (a ``RobotDescriptionError``) when ``B(q)`` is singular, naming the joint.
+    model.errors.InputError
+        Bad step, motor model (or one that differs from the Robot's), unknown robot or platform;
+        :class:`fmu.export_checks.SingularInertiaError` (a ``RobotDescriptionError``) when ``B(q)``
+        is singular, naming the joint.
     FmuBuildError
         Not on Linux, no cross compiler for a platform asked for, or the generated C did not compile.
     """
     from model import Robot, load_robot
 
     _check_version(fmi_version)
-    _targets(platforms)  # refuse other hosts, and platforms without a compiler, before the symbolic work
+    targets = _targets(platforms)  # refuse other hosts, and platforms without a compiler, before the symbolic work
     if isinstance(robot_or_name, Robot):
         robot = robot_or_name
-        if robot.motor_model != motor_model:
-            robot = Robot(robot.description, motor_model=motor_model)
+        if motor_model is not None and motor_model != robot.motor_model:
+            raise InputError(f"motor_model: {motor_model!r} differs from the robot's own {robot.motor_model!r}; "
+                             "export_fmu exports a Robot as it is (make Robot(robot.description, "
+                             f"motor_model={motor_model!r}) to export the other model)")
     else:
-        robot = load_robot(robot_or_name, motor_model=motor_model)
+        robot = load_robot(robot_or_name, motor_model=motor_model or "reflected")
+    from model.plant import build_plant
+
     from .export_checks import check_inertia
 
     check_inertia(robot)  # a singular B(q) is refused here, naming the joint, not at the importer's first call
-    digest = robot.description.digest()
-    _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {motor_model} motors)")
-    from model.plant import build_plant
-
-    from .robot_resource import description_to_json
-
-    plant = build_plant(robot)
-    spec = spec_from_plant(plant, robot, step, robot_digest=digest, robot_json=description_to_json(robot.description))
-    return build_fmu(spec, path, fmi_version=fmi_version, platforms=platforms, progress=progress)
+    _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {robot.motor_model} motors)")
+    plant = build_plant(robot)  # everything the FMU is built from: the robot as it is, its parameters, its modes
+    return build_fmu(spec_from_plant(plant, step), path, fmi_version=fmi_version, platforms=targets,
+                     progress=progress)
 
 
 def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_inputs: int = 1,
@@ -193,7 +201,7 @@ def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_in
 
 
 def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, fmi_version: int = 2,
-              platforms: Sequence[Platform] | None = None, progress: Progress | None = None) -> Path:
+              platforms: str | Sequence[str | Platform] | None = None, progress: Progress | None = None) -> Path:
     """Generate, compile (for the host and ``platforms``) and zip the FMI ``fmi_version`` FMU of ``spec`` into ``path``."""
     path = Path(path)
     if path.suffix != ".fmu":
@@ -245,6 +253,8 @@ def generate_sources(spec: ModelSpec, sources: Path, *, fmi_version: int = 2, pr
 
     for name in WRAPPER_SOURCES[_check_version(fmi_version)] + WRAPPER_HEADERS:
         shutil.copyfile(C_DIR / name, sources / name)
+    for path in PLANT_STEP_SOURCES:  # the plant's fixed-step rule, the one every engine runs
+        shutil.copyfile(path, sources / path.name)
     headers = fmi_headers_dir(fmi_version)
     for name in FMI_HEADERS[fmi_version]:
         shutil.copyfile(headers / name, sources / name)
@@ -252,7 +262,7 @@ def generate_sources(spec: ModelSpec, sources: Path, *, fmi_version: int = 2, pr
     guid = _guid(spec, sources, table)
     (sources / "model_data.h").write_text(table.model_data_h(guid))
     (sources / "model_data.c").write_text(table.model_data_c(casadi_h))
-    c_files = [*WRAPPER_SOURCES[fmi_version], "model_data.c", casadi_c]
+    c_files = [*WRAPPER_SOURCES[fmi_version], PLANT_STEP_SOURCES[0].name, "model_data.c", casadi_c]
     if fmi_version == 3:  # FMI 3.0 lists the sources in sources/buildDescription.xml, not modelDescription.xml
         (sources / "buildDescription.xml").write_text(_build_description(fid, c_files))
     return table, guid, c_files
@@ -275,44 +285,53 @@ def _build_description(model_identifier: str, c_files: list[str]) -> str:
 
 
 def _generate_casadi(spec: ModelSpec, sources: Path, file_name: str) -> None:
-    from .friction_modes import no_modes
-
     fid = spec.model_identifier
     x = ca.SX.sym("x", spec.ode.numel_in(0))
     u = ca.SX.sym("u", spec.ode.numel_in(1))
     p = ca.SX.sym("p", spec.ode.numel_in(2))
     nd = len(spec.discrete.states) if spec.discrete is not None else 0
     d = ca.SX.sym("d", nd)
-    if spec.discrete is not None:  # no friction modes (ModelSpec checks it): only the empty mode functions are used
-        modes = no_modes(ca.Function("ode", [x, u, p], [ca.SX.zeros(x.numel())]))
-    else:
-        modes = spec.modes if spec.modes is not None else no_modes(spec.ode)
-    m = ca.SX.sym("m", modes.nz)
+    modes = spec.modes  # the plant (model.plant.Plant: events, update, start, active, pivots), or None
+    m = ca.SX.sym("m", modes.nz if modes is not None else 0)
     dx, du, dp = ca.SX.sym("dx", x.numel()), ca.SX.sym("du", u.numel()), ca.SX.sym("dp", p.numel())
+    empty = ca.SX(0, 1)
     if spec.discrete is not None:
         xdot, y = spec.ode(x, u, p, d), spec.out(x, u, p, d)
         d_next = spec.discrete.tick(x, u, p, d)
+    elif modes is not None:
+        xdot, y = spec.ode(x, u, p, m), spec.out(x, u, p)
+        d_next = empty
     else:
-        xdot, y = modes.ode(x, u, p, m), spec.out(x, u, p)
-        d_next = ca.SX(0, 1)
+        xdot, y = spec.ode(x, u, p), spec.out(x, u, p)
+        d_next = empty
+    xdot_sliding = modes.ode_sliding(x, u, p, m) if modes is not None else xdot  # unused without modes
+    if modes is not None:
+        z, (m_next, x_next) = modes.events(x, u, p, m), modes.update(x, u, p, m)
+        z_sliding = modes.events_sliding(x, u, p, m)
+        m_start, active, pivots = modes.start(x, u, p, m), modes.active(x, u, p, m), modes.pivots(x, u, p, m)
+    else:
+        z, z_sliding, m_next, x_next, m_start, active, pivots = empty, empty, empty, x, empty, ca.SX.zeros(2), empty
     wxdot, wy = ca.SX.sym("wxdot", xdot.numel()), ca.SX.sym("wy", y.numel())
-    z, dz = ca.vertcat(x, u, p), ca.vertcat(dx, du, dp)
-    m_next, x_next = modes.update(x, u, p, m)
-    # ode, out and their derivatives take (x, u, p, m, d); the mode functions (x, u, p, m)
+    zz, dz = ca.vertcat(x, u, p), ca.vertcat(dx, du, dp)
+    # ode, out and their derivatives take (x, u, p, m, d); the plant's rule functions (x, u, p, m)
     args, names = [x, u, p, m, d], ["x", "u", "p", "m", "d"]
     functions = [
         ca.Function(f"{fid}_ode", args, [xdot], names, ["xdot"]),
+        ca.Function(f"{fid}_ode_sliding", args, [xdot_sliding], names, ["xdot"]),
         ca.Function(f"{fid}_out", args, [y], names, ["y"]),
-        ca.Function(f"{fid}_ode_dir", args + [dx, du, dp], [ca.jtimes(xdot, z, dz)], names + ["dx", "du", "dp"],
+        ca.Function(f"{fid}_ode_dir", args + [dx, du, dp], [ca.jtimes(xdot, zz, dz)], names + ["dx", "du", "dp"],
                     ["dxdot"]),
-        ca.Function(f"{fid}_out_dir", args + [dx, du, dp], [ca.jtimes(y, z, dz)], names + ["dx", "du", "dp"],
+        ca.Function(f"{fid}_out_dir", args + [dx, du, dp], [ca.jtimes(y, zz, dz)], names + ["dx", "du", "dp"],
                     ["dy"]),
-        ca.Function(f"{fid}_ode_adj", args + [wxdot], [ca.jtimes(xdot, z, wxdot, True)], names + ["wxdot"],
+        ca.Function(f"{fid}_ode_adj", args + [wxdot], [ca.jtimes(xdot, zz, wxdot, True)], names + ["wxdot"],
                     ["a"]),
-        ca.Function(f"{fid}_out_adj", args + [wy], [ca.jtimes(y, z, wy, True)], names + ["wy"], ["a"]),
-        ca.Function(f"{fid}_events", args[:4], [modes.events(x, u, p, m)], names[:4], ["z"]),
+        ca.Function(f"{fid}_out_adj", args + [wy], [ca.jtimes(y, zz, wy, True)], names + ["wy"], ["a"]),
+        ca.Function(f"{fid}_events", args[:4], [z], names[:4], ["z"]),
+        ca.Function(f"{fid}_events_sliding", args[:4], [z_sliding], names[:4], ["z"]),
         ca.Function(f"{fid}_update", args[:4], [m_next, x_next], names[:4], ["m_next", "x_next"]),
-        ca.Function(f"{fid}_start", [x, u, p], [modes.start(x, u, p)], ["x", "u", "p"], ["m"]),
+        ca.Function(f"{fid}_start", args[:4], [m_start], names[:4], ["m_start"]),
+        ca.Function(f"{fid}_active", args[:4], [active], names[:4], ["active"]),
+        ca.Function(f"{fid}_pivots", args[:4], [pivots], names[:4], ["D"]),
         ca.Function(f"{fid}_tick", [x, u, p, d], [d_next], ["x", "u", "p", "d"], ["d_next"]),
     ]
     stamp = (f"/* {STAMP}: CasADi code of the model {fid} (ode, out, their forward-mode\n"
@@ -340,11 +359,27 @@ def _run(cmd: list[str], what: str) -> None:
         raise FmuBuildError(f"{what} failed (exit {proc.returncode}):\n$ {' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
 
 
-def _targets(platforms: Sequence[Platform] | None) -> list[Platform]:
-    """The host's platform, then the others of ``platforms``; FmuBuildError on another host or a missing compiler."""
+def _targets(platforms: str | Sequence[str | Platform] | None) -> list[Platform]:
+    """The host's platform, then the others of ``platforms`` (names as ``--platforms`` takes them, or rows of
+    :data:`~fmu.platforms.PLATFORMS`); FmuBuildError on another host or a missing compiler, InputError for a
+    name that is no platform."""
     binary_platform()
     host = host_platform()
-    targets = [host, *[p for p in (platforms or ()) if p != host]]
+    if isinstance(platforms, str):
+        platforms = [platforms]
+    chosen: list[Platform] = []
+    for item in platforms or ():
+        if isinstance(item, Platform):
+            chosen.append(item)
+        elif isinstance(item, str):
+            chosen.extend(resolve_platforms(item, flag="platforms"))
+        else:
+            raise InputError(f"platforms: expected platform names (as --platforms takes them) or rows of "
+                             f"fmu.platforms.PLATFORMS, got {item!r}")
+    targets = [host]
+    for p in chosen:
+        if p not in targets:
+            targets.append(p)
     try:
         for target in targets:
             compiler_for(target)

@@ -14,12 +14,9 @@ from typing import Any
 import numpy as np
 
 from model.description import RobotDescriptionError
+from model.dynamics.singular import INERTIA_RTOL, singular_joint
 
 __all__ = ["SingularInertiaError", "INERTIA_RTOL", "check_inertia"]
-
-#: An eigenvalue of B(q) at most this fraction of the largest counts as zero (double rounding of a
-#: sum of products is ~1e-16 relative; 1e-12 leaves 4 decades and still flags a truly massless joint).
-INERTIA_RTOL = 1e-12
 
 
 class SingularInertiaError(RobotDescriptionError):
@@ -56,17 +53,14 @@ def check_inertia(robot: Any, count: int = 4, seed: int = 0) -> None:
     """
     where = robot.description.path or robot.name
     for q in _sample_configurations(robot, count, seed):
-        B = np.asarray(robot.inertia(q), dtype=float)
-        eigval, eigvec = np.linalg.eigh(0.5 * (B + B.T))
-        scale = max(float(np.max(np.abs(eigval))), np.finfo(float).tiny)
-        if np.isfinite(eigval).all() and eigval[0] > INERTIA_RTOL * scale:
+        found = singular_joint(robot.inertia(q))  # the joint the null direction of B moves most
+        if found is None:
             continue
-        # the joint the null direction of B moves most
-        i = int(np.argmax(np.abs(eigvec[:, 0])))
+        i, smallest, scale = found
         link = robot.description.links[i]
         name = f" ({link.name})" if link.name else ""
         unit = "kg m^2" if link.is_revolute else "kg"
         raise SingularInertiaError(
             f"{where}, link {i + 1}{name}: the inertia matrix B(q) is singular (smallest eigenvalue "
-            f"{eigval[0]:.3g} {unit} against {scale:.3g} at q = {np.round(q, 3).tolist()}): joint {i + 1} moves "
+            f"{smallest:.3g} {unit} against {scale:.3g} at q = {np.round(q, 3).tolist()}): joint {i + 1} moves "
             "no mass and has no motor inertia; give the link a mass and inertia about its axis, or a motor_inertia")

@@ -1,10 +1,13 @@
-"""The robot description carried inside an FMU (``resources/robot.json``).
+"""The robot carried inside an FMU (``resources/robot.json``): description, motor model and parameters.
 
 Validation and the closed-loop tools rebuild the Python model of an FMU from
-the FMU alone: the exporter writes the whole :class:`model.RobotDescription`
-(every link field, gravity, rest, base and tool, whatever the description
-holds) as JSON into ``resources/``, without the path of the file it came from,
-so the FMU names nothing of the build machine.
+the FMU alone: the exporter writes the robot it exported as JSON into
+``resources/``: the whole :class:`model.RobotDescription` (every link field,
+gravity, rest, base and tool, whatever the description holds, without the path
+of the file it came from, so the FMU names nothing of the build machine), its
+motor model and its dynamics parameters (payload, friction, gravity: the FMU
+parameters' start values). :func:`read_robot` gives back a :class:`model.Robot`
+equal to the exported one. FMUs of format 1 carry the description only.
 """
 
 from __future__ import annotations
@@ -15,11 +18,14 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ROBOT_RESOURCE", "description_to_json", "description_from_json", "read_robot_resource"]
+__all__ = ["ROBOT_RESOURCE", "description_to_json", "description_from_json", "read_robot", "read_robot_resource",
+           "robot_from_json", "robot_to_json"]
 
 #: Where the description lives inside the FMU.
 ROBOT_RESOURCE = "resources/robot.json"
 _FORMAT = "manipulator-workbench robot description 1"
+#: Format 2: the description of format 1 plus the motor model and the parameters (by name).
+_FORMAT_ROBOT = "manipulator-workbench robot 2"
 
 
 def _plain(value: Any) -> Any:
@@ -40,13 +46,26 @@ def _tuples(value: Any) -> Any:
     return value
 
 
-def description_to_json(description: Any) -> str:
-    """The description as JSON text; ``path`` is left out (the FMU keeps no path of the build machine)."""
+def _description_data(description: Any) -> Any:
     data = {f.name: getattr(description, f.name) for f in dataclasses.fields(description) if f.name != "path"}
     data["links"] = [{f.name: getattr(lk, f.name) for f in dataclasses.fields(lk)} for lk in description.links]
     data["extra"] = dict(description.extra)
-    return json.dumps({"format": _FORMAT, "description": _plain(data)}, indent=1, sort_keys=True,
-                      allow_nan=False) + "\n"
+    return _plain(data)
+
+
+def _dumps(doc: dict[str, Any]) -> str:
+    return json.dumps(doc, indent=1, sort_keys=True, allow_nan=False) + "\n"
+
+
+def description_to_json(description: Any) -> str:
+    """The description as JSON text (format 1); ``path`` is left out (the FMU keeps no path of the build machine)."""
+    return _dumps({"format": _FORMAT, "description": _description_data(description)})
+
+
+def robot_to_json(robot: Any) -> str:
+    """A :class:`model.Robot` as JSON text (format 2): its description, motor model and parameters by name."""
+    return _dumps({"format": _FORMAT_ROBOT, "description": _description_data(robot.description),
+                   "motor_model": robot.motor_model, "parameters": robot.parameters.as_dict()})
 
 
 def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
@@ -65,8 +84,8 @@ def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
 
     try:
         doc = json.loads(text)
-        if doc.get("format") != _FORMAT:
-            raise ValueError(f"format {doc.get('format')!r}, expected {_FORMAT!r}")
+        if doc.get("format") not in (_FORMAT, _FORMAT_ROBOT):
+            raise ValueError(f"format {doc.get('format')!r}, expected {_FORMAT_ROBOT!r} or {_FORMAT!r}")
         data = dict(doc["description"])
         if len(data["links"]) > MAX_JOINTS:
             raise RobotDescriptionError(f"{source}: {len(data['links'])} links: more than the joint-count limit "
@@ -82,6 +101,42 @@ def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
         raise RobotDescriptionError(f"{source}: not a robot description of this workbench: {exc}") from None
 
 
+def robot_from_json(text: str, source: str = ROBOT_RESOURCE, motor_model: str = "reflected") -> Any:
+    """The :class:`model.Robot` written by :func:`robot_to_json` (its motor model and parameters); for a
+    format-1 text (a description only) the robot with ``motor_model`` and the description's parameters.
+
+    Raises
+    ------
+    model.RobotDescriptionError
+        Not such a robot (``source`` names where it came from): a bad description, motor model or
+        parameter set (names other than the description's, values out of range).
+    """
+    from model import Robot
+    from model.description import RobotDescriptionError
+
+    description = description_from_json(text, source)
+    doc = json.loads(text)
+    if doc.get("format") != _FORMAT_ROBOT:
+        return Robot(description, motor_model=motor_model)
+    try:
+        robot = Robot(description, motor_model=doc["motor_model"])
+        values = doc["parameters"]
+        layout = robot.parameters.layout
+        if not isinstance(values, dict) or sorted(values) != sorted(layout.names):
+            raise ValueError(f"parameters: expected the names {list(layout.names)}")
+        return robot.with_parameters(type(robot.parameters)(layout, [float(values[k]) for k in layout.names]))
+    except (ValueError, KeyError, TypeError) as exc:
+        raise RobotDescriptionError(f"{source}: not a robot of this workbench: {exc}") from None
+
+
+def read_robot(fmu_path: str | Path, motor_model: str = "reflected") -> Any | None:
+    """The :class:`model.Robot` embedded in an FMU (description, motor model, parameters), or None if it has
+    none; a format-1 resource gives the description's robot with ``motor_model``. Raises as
+    :func:`read_robot_resource`."""
+    text = _resource_text(fmu_path)
+    return None if text is None else robot_from_json(text, f"{fmu_path}: {ROBOT_RESOURCE}", motor_model)
+
+
 def read_robot_resource(fmu_path: str | Path) -> Any | None:
     """The description embedded in an FMU, or None if it has none (FMUs of other tools, older exports).
 
@@ -92,6 +147,11 @@ def read_robot_resource(fmu_path: str | Path) -> Any | None:
     fmu.archive.FmuArchiveError
         The archive breaks a limit of :mod:`fmu.archive`.
     """
+    text = _resource_text(fmu_path)
+    return None if text is None else description_from_json(text, f"{fmu_path}: {ROBOT_RESOURCE}")
+
+
+def _resource_text(fmu_path: str | Path) -> str | None:
     from model.description import RobotDescriptionError
     from model.limits import MAX_FILE_BYTES
 
@@ -107,7 +167,6 @@ def read_robot_resource(fmu_path: str | Path) -> Any | None:
             raise RobotDescriptionError(f"{where}: {size} bytes: larger than the robot file size limit of "
                                         f"{MAX_FILE_BYTES} bytes")
         try:
-            text = zf.read(ROBOT_RESOURCE).decode()
+            return zf.read(ROBOT_RESOURCE).decode()
         except UnicodeDecodeError as exc:
             raise RobotDescriptionError(f"{where}: not UTF-8 text (byte {exc.start})") from None
-    return description_from_json(text, where)

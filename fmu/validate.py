@@ -6,10 +6,14 @@
 * the binary: it exports the ``fmi2`` functions only and needs only libc and libm; the
   binaries of other platforms (Windows, macOS, Linux on aarch64) are listed and
   checked structurally (:mod:`fmu.binaries`);
-* Co-Simulation and Model Exchange (CVode) runs by FMPy against the Python plant
-  integrated by :func:`scipy.integrate.solve_ivp` at a tight tolerance, on the
-  computed-torque feed-forward of the robot's task (open loop, so over a short
-  horizon where the comparison is meaningful);
+* Co-Simulation and Model Exchange (CVode) runs by FMPy against the one plant
+  (:mod:`model.plant`, the robot read back from the FMU) advanced by its fixed-step
+  rule (the rule every engine runs, stick-slip friction events included) at an
+  eighth of the FMU's internal step, on the computed-torque feed-forward of the
+  robot's task (open loop, so over a short horizon where the comparison is
+  meaningful): Co-Simulation within ten times RK4's own error estimate,
+  Model Exchange within its tolerance, and Co-Simulation against the same rule at
+  the FMU's own step to rounding (the FMU is the plant);
 * FMU state get/set and serialise/deserialise round trips, bit for bit;
 * directional derivatives against central finite differences;
 * libcosim, the second importer: two instances side by side, against FMPy.
@@ -37,6 +41,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .archive import check_fmu_archive, model_description_xml
+from .variables import substeps
 from model.errors import InputError
 from model.limits import MAX_SAMPLES
 
@@ -46,7 +51,8 @@ __all__ = [
     "DIVERGENCE_GAIN",
     "Check",
     "divergence_horizon",
-    "reference_states",
+    "REFERENCE_REFINEMENT",
+    "plant_states",
     "TorqueProfile",
     "TrackingError",
     "RoundTrip",
@@ -67,6 +73,9 @@ __all__ = [
 ]
 
 ME_RTOL = 1e-10
+#: The reference is the plant's fixed-step rule at the FMU's internal step divided by this: RK4's error,
+#: O(h^4), is then 8^4 = 4096 times smaller than the FMU's, below what the Co-Simulation check resolves.
+REFERENCE_REFINEMENT = 8
 #: The comparison horizon ends where the open-loop arm amplifies a perturbation of its state this much:
 #: beyond it a tolerance-sized difference grows into anything and a comparison says nothing.
 DIVERGENCE_GAIN = 1e3
@@ -82,6 +91,10 @@ TOLERANCES = {
     # ... plus this floor: the reference's rtol 1e-11 amplified DIVERGENCE_GAIN times, x 10 (seen 7e-12, Puma)
     "cs_floor": 10 * 1e-11 * DIVERGENCE_GAIN,
     "cosim": 1e-12,      # libcosim against FMPy, relative to the state scale: the same binary, the same arithmetic
+    # the FMU's Co-Simulation against the plant's rule at the FMU's internal step, relative: the same C rule on the
+    # same generated expressions (built twice), so rounding only, amplified at most DIVERGENCE_GAIN times: 1e-16 x 1e3
+    # x 10 (seen 0 on the SCARA and the Puma 560: the two builds compute bit for bit the same)
+    "plant": 1e-12,
     "directional": 1e-6, # |AD - FD| / (1 + |FD|), best of Richardson-combined central differences, steps 1e-4..1e-7
 }
 
@@ -151,34 +164,39 @@ def feedforward_profile(robot: Any, t_end: float = 3.0, hold: float = 0.01) -> T
                          f"{what}: computed-torque feed-forward, held {hold * 1e3:g} ms")
 
 
-def reference_response(plant: Any, profile: TorqueProfile, p: np.ndarray | None = None,
-                       x0: np.ndarray | None = None, rtol: float = 1e-11, atol: float = 1e-12
-                       ) -> tuple[np.ndarray, np.ndarray]:
-    """The Python plant under ``profile``: times ``t_switch`` and ``t_end``, and the states there.
+def plant_states(robot: Any, t: np.ndarray, tau_m: np.ndarray, sub_step: float, p: np.ndarray | None = None,
+                 x0: np.ndarray | None = None) -> np.ndarray:
+    """(len(t), 2n) states of the one plant at the times ``t`` under motor torques ``tau_m[k]`` held on ``[t_k, t_k+1]``.
 
-    Each hold interval is one :func:`scipy.integrate.solve_ivp` (DOP853) run with
-    constant input, so the piecewise-constant torque costs the solver no accuracy.
+    ``robot``'s plant (:mod:`model.plant`, parameters ``p``, default the robot's) is advanced by its
+    fixed-step rule (:mod:`model.compiled_plant`) over each interval in sub-steps of at most ``sub_step``
+    s (counted as the FMU counts them, :func:`fmu.variables.substeps`). The modes start as an importer
+    starts the FMU: the first torques set before initialisation ends. Rows after a divergence are NaN.
     """
-    from scipy.integrate import solve_ivp
+    from model.compiled_plant import compiled_plant
 
-    p = np.asarray(plant.param_defaults if p is None else p, dtype=float)
-    x = np.asarray(plant.x0 if x0 is None else x0, dtype=float).copy()
-    ode = plant.ode
+    n = robot.n
+    run = compiled_plant(robot).run(robot.parameters.vector if p is None else p)
+    X = np.full((len(t), 2 * n), np.nan)
+    try:
+        run.start(np.concatenate([robot.q_rest, np.zeros(n)]) if x0 is None else x0, tau_m[0])
+        X[0] = run.x
+        for k in range(len(t) - 1):
+            h = float(t[k + 1] - t[k])
+            if not run.advance(tau_m[k], h, substeps(h, sub_step)):
+                break
+            X[k + 1] = run.x
+    finally:
+        run.close()
+    return X
+
+
+def reference_response(robot: Any, profile: TorqueProfile, p: np.ndarray | None = None,
+                       x0: np.ndarray | None = None, internal_step: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
+    """The one plant under ``profile``: times ``t_switch`` and ``t_end``, and the states there, by
+    :func:`plant_states` at ``internal_step / REFERENCE_REFINEMENT``."""
     t = np.append(profile.t_switch, profile.t_end)
-    X = np.zeros((t.size, x.size))
-    X[0] = x
-    for i in range(profile.t_switch.size):
-        u = profile.tau_m[i]
-
-        def f(_t: float, xv: np.ndarray, u: np.ndarray = u) -> np.ndarray:
-            return np.asarray(ode(xv, u, p)).reshape(-1)
-
-        sol = solve_ivp(f, (t[i], t[i + 1]), x, method="DOP853", rtol=rtol, atol=atol)
-        if not sol.success:
-            raise RuntimeError(f"reference solve_ivp failed on [{t[i]}, {t[i + 1]}]: {sol.message}")
-        x = sol.y[:, -1]
-        X[i + 1] = x
-    return t, X
+    return t, plant_states(robot, t, profile.tau_m, internal_step / REFERENCE_REFINEMENT, p=p, x0=x0)
 
 
 # ------------------------------------------------------- description, binary
@@ -286,9 +304,11 @@ class RobotNotReloadableError(InputError):
 def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
     """The robot the FMU was built from, from the FMU alone; None if it records none.
 
-    The description embedded as ``resources/robot.json`` is loaded (FMUs
-    exported before it was embedded: the built-in robot of the recorded name);
-    its digest must equal the one recorded in the VendorAnnotations.
+    The robot embedded as ``resources/robot.json`` is loaded: its description, motor model and
+    parameters (:func:`fmu.robot_resource.read_robot`), equal to the exported robot (FMUs exported
+    before the resource: the built-in robot of the recorded name; before the parameters were
+    embedded: the description's parameters). The description's digest must equal the one recorded
+    in the VendorAnnotations.
 
     Raises
     ------
@@ -302,21 +322,21 @@ def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
     from model import Robot
     from model.loading import load_description
 
-    from .robot_resource import read_robot_resource
+    from .robot_resource import read_robot
 
     recorded = fmu_robot(fmu_path)
     if recorded is None:
         return None
     name, motor_model = recorded
-    description = read_robot_resource(fmu_path)
-    if description is None:
-        description = load_description(name)
+    robot = read_robot(fmu_path, motor_model)
+    if robot is None:
+        robot = Robot(load_description(name), motor_model=motor_model)
     digest = fmu_robot_digest(fmu_path)
-    if digest is not None and description.digest() != digest:
+    if digest is not None and robot.description.digest() != digest:
         raise RobotNotReloadableError(
             f"the FMU was built from a modified description (digest {digest[:16]}), not the one {name!r} "
-            f"loads now (digest {description.digest()[:16]})")
-    return Robot(description, motor_model=motor_model)
+            f"loads now (digest {robot.description.digest()[:16]})")
+    return robot
 
 
 # ---------------------------------------------------------------- tracking
@@ -372,24 +392,8 @@ def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_re
                          float(dP.max()), q_scale, qd_scale, p_scale)
 
 
-def reference_states(robot: Any, plant: Any, profile: TorqueProfile, x0: np.ndarray | None = None
-                     ) -> tuple[np.ndarray, np.ndarray]:
-    """The Python model's states at the switching times of ``profile`` and at its end.
-
-    With Coulomb friction, the stick-slip law of the FMU integrated by :mod:`fmu.reference`
-    (events located by solve_ivp); without, :func:`reference_response` (the same law then).
-    """
-    from .reference import coulomb_limits, simulate_stick_slip
-
-    tc_pos, tc_neg = coulomb_limits(robot)
-    if not np.any(tc_pos - tc_neg > 0):
-        return reference_response(plant, profile, x0=x0)
-    res = simulate_stick_slip(robot, profile, x0=x0, rtol=1e-11, atol=1e-12, samples_per_hold=1)
-    return res.t, res.X
-
-
-def divergence_horizon(robot: Any, plant: Any, profile: TorqueProfile, X_ref: np.ndarray,
-                       delta: float = 1e-6) -> float:
+def divergence_horizon(robot: Any, profile: TorqueProfile, X_ref: np.ndarray, delta: float = 1e-6,
+                       internal_step: float = 1e-3) -> float:
     """Time (s, a switching time of ``profile``) until which the open-loop arm amplifies a perturbation
     of its initial joint positions at most :data:`DIVERGENCE_GAIN` times.
 
@@ -401,7 +405,7 @@ def divergence_horizon(robot: Any, plant: Any, profile: TorqueProfile, X_ref: np
     n = X_ref.shape[1] // 2
     x0 = X_ref[0].copy()
     x0[:n] += delta
-    t, X = reference_states(robot, plant, profile, x0=x0)
+    t, X = reference_response(robot, profile, x0=x0, internal_step=internal_step)
     gain = np.max(np.abs(X - X_ref), axis=1) / delta
     beyond = np.flatnonzero(gain > DIVERGENCE_GAIN)
     return float(t[-1] if beyond.size == 0 else t[max(int(beyond[0]) - 1, 0)])
@@ -797,18 +801,17 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     plant = build_plant(robot)
     p_ref = np.array(plant.param_defaults, dtype=float)
     start: dict[str, float] = {}
-    from .reference import coulomb_limits
-
-    if np.any(np.subtract(*coulomb_limits(robot)) > 0):
-        report.notes.append("Coulomb friction with stick-slip: the reference is fmu.reference (the same law, "
-                            "events located by solve_ivp)")
+    internal = _internal_step(fmu_path)
+    if np.any(robot.parameters.field("coulomb_friction_pos") - robot.parameters.field("coulomb_friction_neg") > 0):
+        report.notes.append("Coulomb friction with stick-slip: the reference is the plant's rule with its friction "
+                            "modes (events located by bisection)")
     _say(progress, f"computed-torque feed-forward over {t_end:g} s")
     profile = feedforward_profile(robot, t_end=t_end)
     report.profile = profile.description
-    _say(progress, "reference: the Python plant with solve_ivp (DOP853, rtol 1e-11)")
-    t_ref, X_ref = reference_states(robot, plant, profile)
+    _say(progress, f"reference: the plant's fixed-step rule at internal_step / {REFERENCE_REFINEMENT}")
+    t_ref, X_ref = reference_response(robot, profile, internal_step=internal)
     _say(progress, "divergence horizon: the reference again from positions perturbed by 1e-6")
-    horizon = divergence_horizon(robot, plant, profile, X_ref)
+    horizon = divergence_horizon(robot, profile, X_ref, internal_step=internal)
     keep = t_ref <= horizon + 1e-12
     if keep.sum() < 2:
         keep[:2] = True
@@ -827,7 +830,6 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     _say(progress, f"FMPy Co-Simulation over {horizon:g} s, communication step {step:g} s, and again at half "
                    f"the internal step (RK4's own error)")
     cs = simulate_cs(fmu_path, horizon, step, inputs=table, outputs=state_names + tool_names, start_values=start)
-    internal = _internal_step(fmu_path)
     cs_half = simulate_cs(fmu_path, horizon, step, inputs=table, outputs=state_names + tool_names,
                           start_values={**start, "internal_step": internal / 2})
     cs_err = tracking_error(f"Co-Simulation (RK4, h={step:g})", cs.t, cs.stack(state_names),
@@ -841,6 +843,14 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     report.checks += _tracking_checks(cs_err, "Co-Simulation", cs_bound,
                                       f"bound {TOLERANCES['cs_richardson']:g} x RK4's error estimate "
                                       f"{rk4_rel:.2e} + {TOLERANCES['cs_floor']:g}")
+    _say(progress, "the plant's rule on the importer's communication steps: the FMU's Co-Simulation to rounding")
+    X_same = plant_states(robot, cs.t, np.array([profile.at(float(tk)) for tk in cs.t[:-1]]), internal)
+    P_same = np.array([np.asarray(plant.out(x, np.zeros(n), p_ref)).reshape(-1)[3 * n:3 * n + 3] for x in X_same])
+    same_err = tracking_error(f"the plant's rule (h={internal:g})", cs.t, cs.stack(state_names), cs.stack(tool_names),
+                              cs.t, X_same, P_same)
+    report.errors.append(same_err)
+    report.checks += _tracking_checks(same_err, "Co-Simulation = plant", TOLERANCES["plant"],
+                                      "the same rule on the same plant: rounding only")
     _say(progress, f"FMPy Model Exchange with CVode, rtol {ME_RTOL:g}")
     me = simulate_me(fmu_path, horizon, step, inputs=table, outputs=state_names + tool_names,
                      start_values=start, relative_tolerance=ME_RTOL)

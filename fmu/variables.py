@@ -130,7 +130,8 @@ class DiscreteStates:
 class ModelSpec:
     """What an FMU is built from.
 
-    ``ode(x, u, p) -> xdot`` and ``out(x, u, p) -> y`` are CasADi Functions;
+    ``ode(x, u, p) -> xdot`` and ``out(x, u, p) -> y`` are CasADi Functions (with ``modes``, the
+    plant's friction modes, ``ode`` takes ``m`` as a fourth input);
     ``states``, ``inputs``, ``params`` and ``outputs`` name every entry of x,
     u, p and y. ``output_state[k]`` is the index of the state that output k
     equals (such outputs are exposed as the state variable itself), or -1.
@@ -159,7 +160,7 @@ class ModelSpec:
     motor_model: str = ""
     robot_digest: str = ""  # RobotDescription.digest() of the robot built, recorded to check a reload
     robot_json: str = ""    # the whole description (fmu.robot_resource), shipped as resources/robot.json
-    modes: Any = None       # fmu.friction_modes.FrictionModes of the stick-slip friction, or None (no modes)
+    modes: Any = None       # model.plant.Plant (its friction modes: events, update, start, active, pivots), or None
     discrete: DiscreteStates | None = None  # sampled discrete states (a digital controller's integrator), or None
 
     def __post_init__(self) -> None:
@@ -172,12 +173,14 @@ class ModelSpec:
         for key in expected:
             if got[key] != expected[key]:
                 raise ValueError(f"{key}: expected sizes (x, u, p) = {expected[key]}, got {got[key]}")
-        n_in = 4 if self.discrete is not None else 3
-        if self.ode.n_in() != n_in or self.out.n_in() != n_in:
-            raise ValueError(f"ode, out: expected {n_in} inputs (x, u, p{', d' if n_in == 4 else ''}), got "
-                             f"{self.ode.n_in()} and {self.out.n_in()}")
         if self.discrete is not None and self.modes is not None:
             raise ValueError("discrete: a model with sampled states has no friction modes")
+        extra = ", d" if self.discrete is not None else ", m" if self.modes is not None else ""
+        ode_in = 3 + bool(extra)
+        out_in = 4 if self.discrete is not None else 3
+        if self.ode.n_in() != ode_in or self.out.n_in() != out_in:
+            raise ValueError(f"ode, out: expected {ode_in} and {out_in} inputs (x, u, p{extra}), got "
+                             f"{self.ode.n_in()} and {self.out.n_in()}")
         if self.ode.numel_out(0) != nx:
             raise ValueError(f"ode output: expected {nx} entries, got {self.ode.numel_out(0)}")
         if self.out.numel_out(0) != ny:
@@ -405,6 +408,7 @@ class VariableTable:
             model_identifier_string=_c_string(spec.model_identifier),
             nx=len(spec.states), nu=len(spec.inputs), np=len(spec.params), ny=len(spec.outputs),
             nz=spec.modes.nz if spec.modes is not None else 0,
+            npiv=spec.modes.pivots.numel_out(0) if spec.modes is not None else 0,
             nd=len(spec.discrete.states) if spec.discrete is not None else 0,
             nvars=len(self.variables),
             narrays=len(self.arrays()),
@@ -435,11 +439,12 @@ class VariableTable:
             u_start=_c_array(np.zeros(len(spec.inputs))),
             p_start=_c_array(spec.p_start),
             step_start=_c_number(spec.step),
-            ode=f"{fid}_ode", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
+            ode=f"{fid}_ode", ode_sliding=f"{fid}_ode_sliding", out=f"{fid}_out", ode_dir=f"{fid}_ode_dir", out_dir=f"{fid}_out_dir",
             ode_adj=f"{fid}_ode_adj", out_adj=f"{fid}_out_adj", tick=f"{fid}_tick",
             d_start=_c_array(spec.discrete.start if spec.discrete is not None else np.zeros(0)),
             sample_period=_c_number(spec.discrete.period if spec.discrete is not None else 0.0),
-            events=f"{fid}_events", update=f"{fid}_update", start=f"{fid}_start",
+            events=f"{fid}_events", events_sliding=f"{fid}_events_sliding", update=f"{fid}_update", start=f"{fid}_start", active=f"{fid}_active",
+            pivots=f"{fid}_pivots",
         )
 
     def _robot_annotation_attrs(self) -> str:
@@ -636,55 +641,33 @@ def build_table(spec: ModelSpec) -> VariableTable:
 
 # ------------------------------------------------------------ specifications
 
-def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str | None = None,
-                    robot_digest: str = "", robot_json: str = "") -> ModelSpec:
-    """The :class:`ModelSpec` of a robot's plant (``model.plant.build_plant``).
+def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None) -> ModelSpec:
+    """The :class:`ModelSpec` of a robot's plant (:func:`model.plant.build_plant`): everything from the plant.
 
-    States ``q[i]`` and ``qd[i]`` (also outputs), inputs the motor torques
-    ``tau_m[i]``, outputs the motor positions and the tool pose, parameters
-    the payload and friction (tunable) and gravity (fixed). The robot's name,
-    ``robot_digest`` (the description's :meth:`~model.RobotDescription.digest`)
-    and, with ``robot_json`` (:func:`fmu.robot_resource.description_to_json`),
-    the whole description are recorded, so the FMU alone rebuilds the model.
+    States ``q[i]`` and ``qd[i]`` (also outputs), inputs the motor torques ``tau_m[i]``, outputs the
+    motor positions and the tool pose in the world frame, parameters the payload and friction
+    (tunable) and gravity (fixed), their start values the plant robot's parameters, and the friction
+    modes of the plant. The robot the plant was built from is recorded whole (its description, motor
+    model and parameters as ``resources/robot.json``, :func:`fmu.robot_resource.robot_to_json`, and the
+    description's digest), so the FMU alone gives back the same robot.
     """
+    from .robot_resource import robot_to_json
+
+    robot = plant.robot
     n = int(plant.n)
-    names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
-    kinds = ["revolute" if lk.is_revolute else "prismatic" for lk in robot.description.links]
+    if getattr(plant, "link_mass_scale", False):
+        raise ValueError("plant: expected the plant of a robot (build_plant(robot)), got a kernel plant with a "
+                         "link-mass scale")
     out_names = list(plant.output_names)
-    out_units = list(plant.output_units)
     if len(out_names) != 3 * n + 6:
         raise ValueError(f"plant.output_names: expected 3n + 6 = {3 * n + 6} outputs [q, qd, G q, tool position, "
                          f"tool orientation], got {len(out_names)}")
-    out_desc = getattr(plant, "output_descriptions", None)
-
-    def out_name(k: int, fallback: str) -> str:
-        return out_names[k] if is_structured_name(out_names[k]) else fallback
-
-    states = tuple(
-        [Quantity(f"q[{i + 1}]", out_units[i], f"joint {i + 1} ({names[i]}, {kinds[i]}) position") for i in range(n)]
-        + [Quantity(f"qd[{i + 1}]", out_units[n + i], f"joint {i + 1} ({names[i]}, {kinds[i]}) velocity")
-           for i in range(n)])
+    units, texts = list(plant.output_units), list(plant.output_descriptions)
+    states = tuple(Quantity(out_names[k], units[k], texts[k]) for k in range(2 * n))
+    names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
     inputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque of joint {i + 1} ({names[i]}), motor side")
                    for i in range(n))
-    outputs: list[Quantity] = list(states)
-    for i in range(n):
-        k = 2 * n + i
-        outputs.append(Quantity(out_name(k, f"q_m[{i + 1}]"), out_units[k],
-                                out_desc[k] if out_desc else f"motor {i + 1} ({names[i]}) position, G q"))
-    for j, axis in enumerate("xyz"):
-        k = 3 * n + j
-        outputs.append(Quantity(out_name(k, f"p_tool[{j + 1}]"), out_units[k],
-                                out_desc[k] if out_desc else f"tool position {axis} in the base frame"))
-    angles = ("roll", "pitch", "yaw")
-    for j in range(3):
-        k = 3 * n + 3 + j
-        if out_desc:
-            text = out_desc[k]
-        elif "rpy" in out_names[k]:
-            text = f"tool {angles[j]} in the base frame, ZYX angles: R_0n = Rz(yaw) Ry(pitch) Rx(roll)"
-        else:
-            text = f"tool orientation angle {j + 1} in the base frame"
-        outputs.append(Quantity(out_name(k, f"tool_orientation[{j + 1}]"), out_units[k], text))
+    outputs = states + tuple(Quantity(out_names[k], units[k], texts[k]) for k in range(2 * n, 3 * n + 6))
     params = tuple(Quantity(nm, u, d) for nm, u, d in
                    zip(plant.param_names, plant.param_units, plant.param_descriptions))
     tunable = tuple(not nm.startswith("gravity") for nm in plant.param_names)
@@ -692,18 +675,11 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
     nonneg = ("payload_mass", "viscous_friction", "coulomb_friction_pos")
     p_min = tuple(0.0 if nm.split("[")[0] in nonneg else None for nm in plant.param_names)
     p_max = tuple(0.0 if nm.split("[")[0] == "coulomb_friction_neg" else None for nm in plant.param_names)
-    ode, out = plant.ode, plant.out
-    if ode.is_a("MXFunction"):
-        ode = ode.expand()
-    if out.is_a("MXFunction"):
-        out = out.expand()
     # the first 2n outputs are exposed as the states themselves: check they are [q; qd]
     x_probe = np.random.default_rng(0).standard_normal(2 * n)
-    y_probe = np.asarray(out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
+    y_probe = np.asarray(plant.out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
     if not np.array_equal(y_probe[:2 * n], x_probe):
         raise ValueError("plant.out: expected the first 2n outputs to be the state [q; qd] itself")
-    from .friction_modes import friction_modes
-
     identifier = model_identifier or robot.description.identifier
     if identifier[0].isdigit():
         identifier = "m_" + identifier
@@ -711,18 +687,18 @@ def spec_from_plant(plant: Any, robot: Any, step: float, model_identifier: str |
         model_identifier=identifier,
         model_name=robot.name,
         description=(f"{robot.description.description or robot.name}: rigid-body dynamics with motors "
-                     f"({robot.motor_model} motor model) and friction; inputs motor torques"),
-        ode=ode, out=out,
+                     f"({robot.motor_model} motor model) and stick-slip friction; inputs motor torques"),
+        ode=plant.ode, out=plant.out,
         states=states, x_start=np.asarray(plant.x0, dtype=float),
         inputs=inputs,
         params=params, p_start=np.asarray(plant.param_defaults, dtype=float), p_tunable=tunable, p_min=p_min,
-        p_max=p_max, outputs=tuple(outputs), output_state=tuple(list(range(2 * n)) + [-1] * (n + 6)),
+        p_max=p_max, outputs=outputs, output_state=tuple(list(range(2 * n)) + [-1] * (n + 6)),
         step=float(step),
         robot=robot.name,
         motor_model=robot.motor_model,
-        robot_digest=robot_digest,
-        robot_json=robot_json,
-        modes=friction_modes(robot, tuple(plant.param_names)),
+        robot_digest=robot.description.digest(),
+        robot_json=robot_to_json(robot),
+        modes=plant,
     )
 
 

@@ -8,7 +8,7 @@ and ``manip info`` start fast. The dynamics class is :class:`model.dynamics.Dyna
 
 from .chain import Chain, build_chain
 from .description import BUILTIN_ROBOTS, InertiaConsistencyWarning, LinkDescription, RobotDescription, RobotDescriptionError
-from .errors import InputError, NumericalError, ToolchainError, WorkbenchError
+from .errors import InputError, NumericalError, SingularDynamicsError, ToolchainError, WorkbenchError
 from .loading import load_description
 from .clik import CLIKResult, clik, seed_clik_task
 from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
@@ -30,6 +30,7 @@ __all__ = [
     "IKResult",
     "IKSolution",
     "NoClosedFormError",
+    "SingularDynamicsError",
     "SingularityReport",
     "WorkspaceError",
     "clik",

@@ -39,13 +39,13 @@ class KinematicArm(Protocol):
     def q_rest(self) -> np.ndarray: ...
 
     def fkine(self, q: Any) -> np.ndarray:
-        """Pose of the end effector in the world frame, T_0E (4, 4), m."""
+        """Pose of the tool frame E in the world frame W, T_WE (4, 4), m (base and tool included)."""
 
     def jacob0(self, q: Any) -> np.ndarray:
-        """Geometric Jacobian J_0 (6, n) expressed in the world frame."""
+        """Geometric Jacobian (6, n) of the tool origin, rows [v; w], world-frame axes."""
 
     def fkine_batch(self, Q: Any) -> np.ndarray:
-        """Poses T_0E (N, 4, 4) of N joint vectors given as an (N, n) array, m."""
+        """Poses T_WE (N, 4, 4) of N joint vectors given as an (N, n) array, m."""
 
 
 class DynamicArm(KinematicArm, Protocol):

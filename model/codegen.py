@@ -77,6 +77,7 @@ __all__ = [
     "GENERATOR_VERSION",
     "LazyLibrary",
     "NoCompilerWarning",
+    "PLANT_STEP_SOURCES",
     "PointEvaluator",
     "Progress",
     "UnitInfo",
@@ -95,6 +96,9 @@ __all__ = [
 GENERATOR_VERSION = "dyn-2"
 C_DIR = Path(__file__).resolve().parent / "dynamics" / "c"
 BATCH_SOURCE = C_DIR / "batch.c"
+#: The fixed-step rule of the plant (``plant_step.c``) and its header: linked into the libraries that
+#: integrate the plant (:mod:`model.compiled_plant`, the closed-loop kernel) and shipped in every FMU.
+PLANT_STEP_SOURCES = (C_DIR / "plant_step.c", C_DIR / "plant_step.h")
 #: The one C header of the CasADi types (``typedef``-like macros and their ``_Static_assert``).
 ABI_HEADER = C_DIR / "casadi_abi.h"
 #: The C types given to casadi.CodeGenerator; they must match ABI_HEADER (a test reads both).
@@ -639,7 +643,8 @@ def build_library(
         Called with a :class:`BuildEvent` at each stage (and as each unit finishes compiling).
     extra_sources
         Handwritten C files linked in besides ``batch.c`` (compiled with :data:`BASE_CFLAGS`; their
-        contents are part of the key), e.g. the closed-loop kernel; they may include ``casadi_abi.h``.
+        contents are part of the key), e.g. the closed-loop kernel; they may include ``casadi_abi.h``
+        and the headers listed here too (``.h`` files are copied beside them, not compiled).
 
     A cached library whose SHA-256 differs from the one recorded at build time, or
     that does not load, is deleted and rebuilt with a :class:`CorruptCacheWarning`.
@@ -697,7 +702,8 @@ def build_library(
         units.append((src_dir / BATCH_SOURCE.name, tmp_dir / "mw_batch.o", compile_flags(generated=False)))
         for x in extra:
             shutil.copyfile(x, src_dir / x.name)
-            units.append((src_dir / x.name, tmp_dir / f"mw_extra_{x.stem}.o", compile_flags(generated=False)))
+            if x.suffix != ".h":  # a header is copied beside the sources it is included by
+                units.append((src_dir / x.name, tmp_dir / f"mw_extra_{x.stem}.o", compile_flags(generated=False)))
         order = sorted(range(len(units)), key=lambda i: -(c_bytes[i] if i < len(c_bytes) else 0))  # largest first
         units = [units[i] for i in order]
         n_jobs = jobs or build_jobs()

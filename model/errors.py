@@ -18,7 +18,8 @@ from __future__ import annotations
 import difflib
 from typing import Any, Iterable, Sequence
 
-__all__ = ["InputError", "NumericalError", "ToolchainError", "WorkbenchError", "closest", "did_you_mean"]
+__all__ = ["InputError", "NumericalError", "SingularDynamicsError", "ToolchainError", "WorkbenchError", "closest",
+           "did_you_mean"]
 
 
 class WorkbenchError(Exception):
@@ -57,6 +58,26 @@ class InputError(WorkbenchError, ValueError):
 
 class NumericalError(WorkbenchError, ArithmeticError):
     """A numerical computation failed (diverged, left finite numbers); not a fault of the input's form."""
+
+
+class SingularDynamicsError(NumericalError):
+    """The joint-space inertia matrix B(q) is singular at a configuration: the accelerations are undefined.
+
+    Attributes
+    ----------
+    joint
+        The 1-based joint the null direction of B moves most.
+    q
+        The configuration (n values), rad or m.
+    """
+
+    def __init__(self, message: str, joint: int = 0, q: Any = ()) -> None:
+        super().__init__(message)
+        self.joint = int(joint)
+        self.q = tuple(float(v) for v in q)
+
+    def __reduce__(self) -> tuple[Any, ...]:  # through pickling (sweep workers) with its fields
+        return (type(self), (str(self), self.joint, self.q))
 
 
 class ToolchainError(WorkbenchError, RuntimeError):

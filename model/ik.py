@@ -1,6 +1,7 @@
 """Inverse kinematics: closed form (:func:`ikine_a`) and numeric Levenberg-Marquardt (:func:`ikine`).
 
-Poses are ``T_0E``, the end frame in the base frame (4, 4), m and rad. The
+Poses are ``T_WE``, the tool frame E in the world frame W (4, 4), m and rad, as ``fkine`` returns
+them (W is the robot's frame 0 when it states no ``base`` pose). The
 closed forms and the per-structure knowledge live in :mod:`model.closed_form`;
 closed-loop inverse kinematics along a path is in :mod:`model.clik`.
 """
@@ -53,10 +54,10 @@ def _check_pose(T: Any) -> np.ndarray:
 
 
 def pose_error(T: np.ndarray, T_d: np.ndarray) -> np.ndarray:
-    """(6,) error of pose ``T`` from the desired ``T_d``, both (4, 4) in the base frame.
+    """(6,) error of pose ``T`` from the desired ``T_d``, both (4, 4) in the world frame W.
 
     ``[p_d - p; w]`` with ``w`` the rotation vector (angle-axis, log map) of
-    ``R_d R^T``: the rotation that takes ``R`` to ``R_d``, base-frame axes. m, rad.
+    ``R_d R^T``: the rotation that takes ``R`` to ``R_d``, W axes. m, rad.
     """
     from scipy.spatial.transform import Rotation  # scipy is imported by the functions that use it
 
@@ -247,7 +248,7 @@ def ikine(
     """Numeric inverse kinematics by Levenberg-Marquardt (damped least squares) with restarts.
 
     Minimises ``e^T W e`` with ``e`` = :func:`pose_error` of ``fkine(q)`` from ``T``
-    (base frame) and ``W = diag(mask)``. Step ``dq = (J^T W J + lambda I)^-1 J^T W e``
+    (world frame) and ``W = diag(mask)``. Step ``dq = (J^T W J + lambda I)^-1 J^T W e``
     with ``J = jacob0(q)``; lambda starts at ``damping`` and is divided by 10 after a
     step that lowers the error, multiplied by 10 after one that does not.
 

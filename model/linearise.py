@@ -1,14 +1,19 @@
 """Linearise the plant about an operating point into a ``control.StateSpace``.
 
 States ``x = [q; qd]``, inputs the motor torques ``u`` (joint torque ``G u``),
-outputs chosen by the caller. A and B are exact symbolic Jacobians of
-``xdot = [qd; accel(q, qd, G u, p)]`` evaluated at ``(q0, qd0, u0)`` and the
-current parameters of ``robot.dynamics``.
+outputs chosen by the caller. A and B are exact symbolic Jacobians of the one
+plant's ``xdot = ode(x, u, p, m)`` (:mod:`model.plant`) with the friction modes
+``m`` held, evaluated at ``(q0, qd0, u0)`` and the robot's parameters.
 
-Coulomb friction ``|G| Tc(sign qd)`` is piecewise constant in ``qd``: its
-derivative is 0 wherever ``qd_i != 0``, and the Jacobian returns 0 at
-``qd_i = 0`` too, where the friction is discontinuous (a dead zone of width
-``2 |G| Tc`` that no linear model represents). Viscous friction enters A.
+The modes linearised in: by default the sliding modes, ``m_i = sign(qd0_i)``,
+and ``m_i = +1`` where ``qd0_i = 0``. A sliding joint's Coulomb torque ``|G| Tc``
+is constant, so its derivative is 0 and only viscous friction enters A: the
+small-signal model of a joint that moves, the model the joint-loop designs use.
+At rest a joint with Coulomb friction may instead be stuck (the plant's start
+and update rules decide it from the torques); ``modes`` with a 0 for that joint
+gives the model of the stuck joint (its rows of A and B are zero: it does not
+move under small inputs). Neither represents the dead zone of width ``2 |G| Tc``
+between them, which no linear model does.
 
 The symbolic plant and its Jacobians are built once per :class:`~model.robot.Robot`
 model (kept while its :class:`~model.dynamics.Dynamics` lives, and shared by the robots that
@@ -28,6 +33,7 @@ import numpy as np
 
 from .arm import DynamicArm
 from .arrays import as_joint_vector
+from .errors import InputError
 from .plant import build_plant
 
 __all__ = ["linearise", "OUTPUT_KINDS"]
@@ -59,9 +65,10 @@ def _linearisation(robot: DynamicArm) -> _Linearisation:
             x = ca.SX.sym("x", plant.nx)
             u = ca.SX.sym("u", plant.nu)
             p = ca.SX.sym("p", len(plant.param_names))
-            xdot = plant.ode(x, u, p)
-            jac = ca.Function("linearisation", [x, u, p], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
-                              ["x", "u", "p"], ["A", "B"])
+            m = ca.SX.sym("m", plant.nz)
+            xdot = plant.ode(x, u, p, m)
+            jac = ca.Function("linearisation", [x, u, p, m], [ca.jacobian(xdot, x), ca.jacobian(xdot, u)],
+                              ["x", "u", "p", "m"], ["A", "B"])
             built = _Linearisation(jac, tuple(plant.state_names), tuple(plant.input_names))
             _BUILT[robot.dynamics] = built
         return built
@@ -94,8 +101,9 @@ def _output_matrix(robot: DynamicArm, outputs: str | Sequence[str] | Any) -> tup
     return C, [f"y[{i}]" for i in range(1, C.shape[0] + 1)]
 
 
-def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outputs: str | Sequence[str] | Any = "q") -> control.StateSpace:
-    """Linear model ``dx = A dx + B du``, ``dy = C dx`` of ``robot`` about ``(q0, qd0, u0)``.
+def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outputs: str | Sequence[str] | Any = "q",
+              modes: Any = None) -> control.StateSpace:
+    """Linear model ``dx = A dx + B du``, ``dy = C dx`` of ``robot`` about ``(q0, qd0, u0)`` in friction ``modes``.
 
     Parameters
     ----------
@@ -111,6 +119,9 @@ def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outpu
     outputs
         A kind from :data:`OUTPUT_KINDS` (``"q"``, ``"qd"``, ``"qm"`` = ``G q``), a
         list of kinds (stacked in order), or an explicit (ny, 2n) matrix C.
+    modes
+        (n,) friction modes held (+1, -1 sliding, 0 stuck); default the sliding modes of ``qd0``
+        (module docstring). A stuck joint needs ``qd0_i = 0``.
 
     Returns
     -------
@@ -124,8 +135,14 @@ def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outpu
     u0v = robot.rne(q0v, qd0v, np.zeros(n)) / G if u0 is None else as_joint_vector(u0, n, "u0")
     C, out_names = _output_matrix(robot, outputs)
 
+    if modes is None:
+        m = np.where(qd0v < 0, -1.0, 1.0)
+    else:
+        m = as_joint_vector(modes, n, "modes")
+        if not np.all(np.isin(m, (-1.0, 0.0, 1.0))) or np.any((m == 0) & (qd0v != 0)):
+            raise InputError(f"modes: expected -1, 0 or +1 per joint, 0 only where qd0 = 0, got {m.tolist()}")
     lin = _linearisation(robot)
-    A, B = (np.array(m) for m in lin.jacobians(np.concatenate([q0v, qd0v]), u0v, robot.parameters.vector))
+    A, B = (np.array(j) for j in lin.jacobians(np.concatenate([q0v, qd0v]), u0v, robot.parameters.vector, m))
     D = np.zeros((C.shape[0], n))
     return control.ss(
         A, B, C, D,

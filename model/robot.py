@@ -8,6 +8,7 @@ algorithms stay free functions that can be tested on their own.
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
@@ -55,7 +56,8 @@ class Robot:
     (:attr:`parameters`: payload, friction, gravity; the description's by
     default). :meth:`with_parameters` gives another Robot with other values
     that shares this one's compiled model; nothing changes a Robot's numbers
-    after it is made.
+    after it is made. Two Robots are equal when their descriptions (not the
+    path they were read from), motor models and parameters are.
     """
 
     def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
@@ -67,6 +69,18 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, n={self.n}, joints={self.description.joint_types!r}, motor_model={self.motor_model!r})"
+
+    def __eq__(self, other: object) -> bool:
+        """The same robot: equal descriptions (wherever they were read from), motor model and parameters."""
+        if not isinstance(other, Robot):
+            return NotImplemented
+        if other is self:
+            return True
+        return (self.motor_model == other.motor_model and self.parameters == other.parameters
+                and dataclasses.replace(self.description, path="") == dataclasses.replace(other.description, path=""))
+
+    def __hash__(self) -> int:
+        return hash((self.description.digest(), self.motor_model))
 
     # ------------------------------------------------------------------ basics
     @property
@@ -247,14 +261,15 @@ class Robot:
         return self.dynamics.accel(q, qd, tau, self._parameters if p is None else p, ws=ws)
 
     def linearise(self, q0: Any, qd0: Any = None, u0: Any = None,
-                  outputs: str | Sequence[str] | Any = "q") -> "control.StateSpace":
-        """Linear model about ``(q0, qd0, u0)`` as a ``control.StateSpace``; see :func:`model.linearise.linearise`.
+                  outputs: str | Sequence[str] | Any = "q", modes: Any = None) -> "control.StateSpace":
+        """Linear model about ``(q0, qd0, u0)`` as a ``control.StateSpace``, in the plant's friction ``modes``
+        (default sliding); see :func:`model.linearise.linearise`.
 
         The symbolic plant and its Jacobians are built on the first call and reused.
         """
         from .linearise import linearise
 
-        return linearise(self, q0, qd0, u0, outputs)
+        return linearise(self, q0, qd0, u0, outputs, modes)
 
     def inertia_batch(self, Q: Any, p: "DynamicsParameters | None" = None) -> np.ndarray:
         """(N, n, n) joint-space inertia B(q) at the N rows of the (N, n) array ``Q``, one compiled call."""

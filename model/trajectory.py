@@ -756,7 +756,7 @@ class CartesianPath:
     The origin moves on the segment (:class:`StraightLine`); the orientation turns
     about the fixed axis of ``R0^T R1`` (angle-axis, i.e. SLERP) with the same time
     scaling s(t): ``R(t) = R0 exp(s(t) [r]x)``, ``r = log(R0^T R1)``, so the angular
-    velocity is ``w = R0 r sdot`` (base frame). At the ends the given poses are
+    velocity is ``w = R0 r sdot`` (in the poses' frame, the world frame W of ``fkine``). At the ends the given poses are
     returned exactly.
     """
 
@@ -776,7 +776,7 @@ class CartesianPath:
         return float(np.linalg.norm(self._r))
 
     def __call__(self, t: float) -> tuple[Array, Array, Array]:
-        """Pose (4, 4), linear velocity (3,) m/s and angular velocity (3,) rad/s, base frame, at ``t`` (s)."""
+        """Pose (4, 4), linear velocity (3,) m/s and angular velocity (3,) rad/s, in the poses' frame, at ``t`` (s)."""
         poses, v, w, _, _ = self.batch(np.array([_scalar(t, "t")]))
         return poses[0], v[0], w[0]
 
@@ -851,7 +851,7 @@ def ctraj(T0: npt.ArrayLike, T1: npt.ArrayLike, T: float, dt: float | None = Non
     Parameters
     ----------
     T0, T1
-        (4, 4) start and end poses in the base frame (m).
+        (4, 4) start and end poses (m), in the world frame W of ``fkine`` for a robot's tool.
     T
         Duration, s (> 0).
     dt, t, t0

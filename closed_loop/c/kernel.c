@@ -1,27 +1,24 @@
 /*
  * One whole closed-loop run in one call (handwritten, not generated): the loop of
- * closed_loop/simulate.py around two CasADi-generated functions, the plant's
- * accel_scaled(q, qd, tau, p, link_mass_scale) and a law's <kind>_controller.
+ * closed_loop/simulate.py around the plant's fixed-step rule (model/dynamics/c/plant_step.c,
+ * on the plant's generated functions with a link-mass scale, model/plant.py) and a law's
+ * generated <kind>_controller.
  *
- * The arithmetic is the Python loop's, operation for operation (the generated code
- * is the same CasADi expression graph, and every file is compiled with
- * -ffp-contract=off): at t_k the controller reads q, qd and the reference row k
- * (and its state z), its torque is held (optionally one period late) while RK4
- * integrates `substeps` sub-steps of h in the form
- *     q2 = q + (0.5 h) qd ... q += (h / 6) (qd + 2 v2 + 2 v3 + v4),
- * and the run stops at the first period whose end state is not finite. Metrics are
- * accumulated on the fly over the samples k = 0..steps (error q_ref - q, tau_m,
- * G qd); nothing is allocated per step and there is no global state (re-entrant).
+ * The arithmetic is the Python loop's, operation for operation: the plant is advanced by
+ * the same C rule on the same CasADi expression graph (with the link masses times a
+ * parameter), every file is compiled with -ffp-contract=off, and the run starts as the
+ * Python loop's (and an FMU's) does: start modes settled with zero torque. At t_k the
+ * controller reads q, qd and the reference row k (and its state z), its torque is held
+ * (optionally one period late) while the rule advances the plant by `substeps` sub-steps,
+ * and the run stops at the first period whose state is not finite. Metrics are
+ * accumulated on the fly over the samples k = 0..steps (error q_ref - q, tau_m, G qd);
+ * nothing is allocated per step and there is no global state (re-entrant).
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "casadi_abi.h"
-
-typedef casadi_int mw_int;
-typedef int (*mw_eval_fn)(const double **arg, double **res, mw_int *iw, double *w, int mem);
-typedef int (*mw_work_fn)(mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
+#include "plant_step.h"
 
 /* The work memory of one generated function. */
 typedef struct {
@@ -58,52 +55,54 @@ enum { MW_N, MW_N_CTRL_IN, MW_N_SIGNALS, MW_STATE_INDEX, MW_DELAY, MW_SUBSTEPS, 
 enum { MW_MAX_ERROR, MW_RMS_ERROR, MW_PEAK_TAU, MW_PEAK_QD_M, MW_SAT_FRACTION, MW_N_METRICS };
 
 /*
+ * plant      the 16 addresses of the plant's generated functions (mw_plant_open of plant_step.h).
  * dims       MW_N_DIMS integers: joints n, controller inputs, controller signal inputs (4 or 5: q, qd,
  *            q_d, qd_d[, qdd_d]), index of the controller state input z (-1: none), one-period delay
  *            (0/1), RK4 sub-steps per period, periods N.
  * ctrl_in    the controller's inputs: its parameters (gains, gear ratio, limits, model parameters) as
  *            given; the entries of the signals and of the state are ignored (set here).
- * h          RK4 sub-step, s.
- * p, scale   the plant's parameter vector and link-mass scale.
+ * dt         control period, s.
+ * p          the plant's parameter vector, the link-mass scale last.
  * G          (n) gear ratios; tau_sat (n) torque limits counted as saturated (|tau| >= tau_sat), or NULL.
  * q_ref...   (N+1, n) references at t_k, row-major; q0, qd0 (n) start state.
  * metrics    out, (MW_N_METRICS, n) row-major: max |e|, RMS e, max |tau_m|, max |G qd|, saturated fraction.
  * Q, QD, TAU out, (N+1, n) each, or NULL: the samples of simulate_tracking.
  * last_k     out: the last sample reached (N, or the period after which the state was not finite).
- * Returns 0, 1 if the run diverged, < 0 on a work-memory or evaluation failure.
+ * fault      out: after status 2 the 1-based joint at which B(q) is singular, then the state there (1 + 2n).
+ * Returns 0, 1 if the run diverged, 2 if the inertia matrix became singular, -10 + k for any other
+ * failure k (MW_PLANT_*) of the plant's rule (a generated function failed, the modes did not settle or
+ * chattered), -3 without memory, -4 if the controller failed.
  */
-int mw_closed_loop(mw_eval_fn accel, mw_work_fn accel_work, mw_eval_fn ctrl, mw_work_fn ctrl_work,
-                   const long long *dims, const double *const *ctrl_in, double h,
-                   const double *p, const double *scale, const double *G, const double *tau_sat,
+int mw_closed_loop(void *const *plant, mw_eval_fn ctrl, mw_work_fn ctrl_work,
+                   const long long *dims, const double *const *ctrl_in, double dt,
+                   const double *p, const double *G, const double *tau_sat,
                    const double *q_ref, const double *qd_ref, const double *qdd_ref,
                    const double *q0, const double *qd0,
-                   double *metrics, double *Q, double *QD, double *TAU, long long *last_k)
+                   double *metrics, double *Q, double *QD, double *TAU, long long *last_k, double *fault)
 {
     const int n = (int)dims[MW_N], n_ctrl_in = (int)dims[MW_N_CTRL_IN], n_sig = (int)dims[MW_N_SIGNALS];
     const int z_index = (int)dims[MW_STATE_INDEX], delay = (int)dims[MW_DELAY];
     const long long substeps = dims[MW_SUBSTEPS], steps = dims[MW_STEPS];
-    mw_call a = {0}, c = {0}; /* zeroed: call_free is safe on a call whose init never ran */
-    int status = call_init(&a, accel, accel_work, 5, 1);
+    mw_call c = {0}; /* zeroed: call_free is safe on a call whose init never ran */
+    MwPlantRun *run = mw_plant_open(2 * n, n, n, plant);
+    int status = run ? 0 : -3;
     if (status == 0) status = call_init(&c, ctrl, ctrl_work, n_ctrl_in, z_index >= 0 ? 2 : 1);
-    /* state, RK4 stages, controller buffers: 16 vectors of n */
-    double *buf = (double *)calloc((size_t)(16 * n), sizeof(double));
+    /* state, modes, inputs, controller buffers */
+    double *buf = (double *)calloc((size_t)(8 * n), sizeof(double));
     if (status == 0 && !buf) status = -3;
     if (status != 0) {
         free(buf);
-        call_free(&a);
         call_free(&c);
+        mw_plant_close(run);
         return status;
     }
-    double *q = buf, *qd = buf + n, *tau = buf + 2 * n;
-    double *q2 = buf + 3 * n, *v2 = buf + 4 * n, *q3 = buf + 5 * n, *v3 = buf + 6 * n, *q4 = buf + 7 * n;
-    double *v4 = buf + 8 * n, *a1 = buf + 9 * n, *a2 = buf + 10 * n, *a3 = buf + 11 * n, *a4 = buf + 12 * n;
-    double *z = buf + 13 * n, *z_next = buf + 14 * n, *tau_m = buf + 15 * n;
-    double *held = (double *)calloc((size_t)(2 * n), sizeof(double));
-    double *tau_new = held ? held + n : NULL;
-    if (!held) {
+    double *x = buf, *q = buf, *qd = buf + n, *m = buf + 2 * n, *u = buf + 3 * n;
+    double *z = buf + 4 * n, *z_next = buf + 5 * n, *tau_m = buf + 6 * n, *held = buf + 7 * n;
+    double *tau_new = (double *)calloc((size_t)n, sizeof(double));
+    if (!tau_new) {
         free(buf);
-        call_free(&a);
         call_free(&c);
+        mw_plant_close(run);
         return -3;
     }
     double *max_e = metrics, *sum_e2 = metrics + n, *peak_tau = metrics + 2 * n;
@@ -118,13 +117,10 @@ int mw_closed_loop(mw_eval_fn accel, mw_work_fn accel_work, mw_eval_fn ctrl, mw_
     if (z_index >= 0) c.arg[z_index] = z;
     c.res[0] = tau_new;
     if (z_index >= 0) c.res[1] = z_next;
-    a.arg[3] = p;
-    a.arg[4] = scale;
-    a.arg[2] = tau;
 
-    const double half_h = 0.5 * h, sixth_h = h / 6.0;
+    int rule = mw_plant_run_start(run, x, m, u, p); /* u is zero: the torque an FMU holds at its start */
     long long k = 0;
-    for (k = 0; k <= steps; ++k) {
+    for (k = 0; k <= steps && rule == MW_PLANT_OK; ++k) {
         const double *qr = q_ref + k * n;
         c.arg[2] = qr;
         c.arg[3] = qd_ref + k * n;
@@ -151,28 +147,15 @@ int mw_closed_loop(mw_eval_fn accel, mw_work_fn accel_work, mw_eval_fn ctrl, mw_
             memcpy(TAU + k * n, tau_m, (size_t)n * sizeof(double));
         }
         if (k == steps) break;
-        for (int i = 0; i < n; ++i) tau[i] = G[i] * tau_m[i];
-        for (long long s = 0; s < substeps; ++s) {
-            a.arg[0] = q; a.arg[1] = qd; a.res[0] = a1;
-            if (a.eval(a.arg, a.res, a.iw, a.w, 0) != 0) { status = -4; break; }
-            for (int i = 0; i < n; ++i) { q2[i] = q[i] + half_h * qd[i]; v2[i] = qd[i] + half_h * a1[i]; }
-            a.arg[0] = q2; a.arg[1] = v2; a.res[0] = a2;
-            if (a.eval(a.arg, a.res, a.iw, a.w, 0) != 0) { status = -4; break; }
-            for (int i = 0; i < n; ++i) { q3[i] = q[i] + half_h * v2[i]; v3[i] = qd[i] + half_h * a2[i]; }
-            a.arg[0] = q3; a.arg[1] = v3; a.res[0] = a3;
-            if (a.eval(a.arg, a.res, a.iw, a.w, 0) != 0) { status = -4; break; }
-            for (int i = 0; i < n; ++i) { q4[i] = q[i] + h * v3[i]; v4[i] = qd[i] + h * a3[i]; }
-            a.arg[0] = q4; a.arg[1] = v4; a.res[0] = a4;
-            if (a.eval(a.arg, a.res, a.iw, a.w, 0) != 0) { status = -4; break; }
-            for (int i = 0; i < n; ++i) {
-                q[i] = q[i] + sixth_h * (qd[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
-                qd[i] = qd[i] + sixth_h * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i]);
-            }
-        }
-        if (status != 0) break;
-        int finite = 1;
-        for (int i = 0; i < n; ++i) finite = finite && isfinite(q[i]) && isfinite(qd[i]);
-        if (!finite) { status = 1; ++k; break; }
+        memcpy(u, tau_m, (size_t)n * sizeof(double));
+        rule = mw_plant_run_advance(run, x, m, u, p, dt, substeps);
+        if (rule == MW_PLANT_NONFINITE) { status = 1; ++k; break; }
+    }
+    if (status == 0 && rule == MW_PLANT_SINGULAR) {
+        fault[0] = (double)mw_plant_run_fault(run, fault + 1);
+        status = 2;
+    } else if (status == 0 && rule != MW_PLANT_OK) {
+        status = -10 + rule;
     }
     if (status >= 0) {
         const double samples = (double)(k > steps ? steps + 1 : k + (status == 1 ? 0 : 1));
@@ -182,9 +165,9 @@ int mw_closed_loop(mw_eval_fn accel, mw_work_fn accel_work, mw_eval_fn ctrl, mw_
         }
     }
     *last_k = k > steps ? steps : k;
-    free(held);
+    free(tau_new);
     free(buf);
-    call_free(&a);
     call_free(&c);
+    mw_plant_close(run);
     return status;
 }

@@ -208,8 +208,9 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     const char *problem;
+    char what[512];
     ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
-    problem = mw_exit_initialization(inst);
+    problem = mw_exit_initialization(inst, what, sizeof(what));
     return problem == NULL ? fmi2OK : fail(inst, "fmi2ExitInitializationMode", problem);
 }
 
@@ -504,7 +505,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
     if (null_arg(inst, fn, "derivatives[]", derivatives)) return fmi2Error;
     if (mw_update_derivatives(inst) != 0) return fail(inst, fn, "the model failed to evaluate the derivatives");
     memcpy(derivatives, inst->xdot, nx * sizeof(double));
-    return non_finite(inst, fn, "the derivatives", derivatives, nx);
+    return (fmi2Status)mw_check_derivatives(inst, fn, derivatives, nx);
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {

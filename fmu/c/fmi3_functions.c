@@ -259,8 +259,9 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     const char *problem;
+    char what[512];
     ENTER(ExitInitializationMode, FOR_ANY, MODES_ExitInitializationMode);
-    problem = mw_exit_initialization(inst);
+    problem = mw_exit_initialization(inst, what, sizeof(what));
     return problem == NULL ? fmi3OK : fail(inst, "fmi3ExitInitializationMode", problem);
 }
 
@@ -776,7 +777,7 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 
     if (null_arg(inst, fn, "derivatives[]", derivatives)) return fmi3Error;
     if (mw_update_derivatives(inst) != 0) return fail(inst, fn, "the model failed to evaluate the derivatives");
     memcpy(derivatives, inst->xdot, nContinuousStates * sizeof(double));
-    return non_finite(inst, fn, "the derivatives", derivatives, nContinuousStates);
+    return (fmi3Status)mw_check_derivatives(inst, fn, derivatives, nContinuousStates);
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {

@@ -16,17 +16,6 @@ static const char *const mw_category_names[MW_LOG_COUNT] = {
 
 static size_t at_least_one(size_t n) { return n > 0 ? n : 1; }
 
-static int work_sizes(const MwFunction *f, mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w) {
-    mw_int a = 0, r = 0, i = 0, w = 0;
-    if (f->work == NULL || f->eval == NULL) return -1;
-    if (f->work(&a, &r, &i, &w) != 0) return -1;
-    if (a > *sz_arg) *sz_arg = a;
-    if (r > *sz_res) *sz_res = r;
-    if (i > *sz_iw) *sz_iw = i;
-    if (w > *sz_w) *sz_w = w;
-    return 0;
-}
-
 MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *name, const MwHost *host,
                             int logging_on) {
     MwInstance *inst;
@@ -35,18 +24,30 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     size_t n_doubles, name_len;
     double *d;
 
-    if (work_sizes(&model->ode, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->ode_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->events, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->update, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->start, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
-        work_sizes(&model->tick, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
+    MwPlantFunctions plant;
+    size_t n_scratch;
+
+    plant.nx = nx;
+    plant.nz = nz;
+    plant.npiv = model->npiv;
+    plant.ode = model->ode;
+    plant.ode_sliding = model->ode_sliding;
+    plant.events = model->events;
+    plant.events_sliding = model->events_sliding;
+    plant.update = model->update;
+    plant.start = model->start;
+    plant.active = model->active;
+    plant.pivots = model->pivots;
+    if (mw_plant_work_sizes(&plant, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->out, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->ode_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->out_dir, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->ode_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->out_adj, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0 ||
+        mw_function_work_sizes(&model->tick, &sz_arg, &sz_res, &sz_iw, &sz_w) != 0) {
         return NULL;
     }
+    n_scratch = mw_plant_scratch_size(&plant);
     if (sz_arg < 0 || sz_res < 0 || sz_iw < 0 || sz_w < 0) return NULL;
 
     inst = (MwInstance *)host->alloc(1, sizeof(MwInstance));
@@ -58,10 +59,9 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
 
     name_len = strlen(name);
     inst->name = (char *)host->alloc(name_len + 1, sizeof(char));
-    /* x, u, p, m, xdot, y, z, d; x_save, x_stage, k1..k4; m_save, z0, z1, next; d_save, d_next;
-       dx, du, dp, dxdot, dy, adj; w */
-    n_doubles = (nx + nu + np + nz + nx + ny + nz + nd) + 6 * nx + (4 * nz + nx) + 2 * nd + (nx + nu + np + nx + ny) +
-                (nx + nu + np) + (size_t)sz_w;
+    /* x, u, p, m, xdot, y, z, d; x_save, m_save; d_save, d_next; dx, du, dp, dxdot, dy, adj; plant scratch; w */
+    n_doubles = (nx + nu + np + nz + nx + ny + nz + nd) + (nx + nz) + 2 * nd + (nx + nu + np + nx + ny) +
+                (nx + nu + np) + n_scratch + (size_t)sz_w;
     inst->block = (double *)host->alloc(at_least_one(n_doubles), sizeof(double));
     inst->arg = (const double **)host->alloc((size_t)sz_arg, sizeof(const double *));
     inst->res = (double **)host->alloc((size_t)sz_res, sizeof(double *));
@@ -82,15 +82,7 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     inst->z = d; d += nz;
     inst->d = d; d += nd;
     inst->x_save = d; d += nx;
-    inst->x_stage = d; d += nx;
-    inst->k1 = d; d += nx;
-    inst->k2 = d; d += nx;
-    inst->k3 = d; d += nx;
-    inst->k4 = d; d += nx;
     inst->m_save = d; d += nz;
-    inst->z0 = d; d += nz;
-    inst->z1 = d; d += nz;
-    inst->next = d; d += nz + nx;
     inst->d_save = d; d += nd;
     inst->d_next = d; d += nd;
     inst->dx = d; d += nx;
@@ -99,7 +91,17 @@ MwInstance *mw_instance_new(const MwModel *model, MwInterface type, const char *
     inst->dxdot = d; d += nx;
     inst->dy = d; d += ny;
     inst->adj = d; d += nx + nu + np;
+    inst->plant_scratch = d; d += n_scratch;
     inst->w = d;
+
+    inst->plant = plant;
+    inst->call.f = &inst->plant; /* the instance does not move: the pointer stays valid */
+    inst->call.arg = inst->arg;
+    inst->call.res = inst->res;
+    inst->call.iw = inst->iw;
+    inst->call.w = inst->w;
+    inst->call.m = inst->m;
+    mw_plant_bind_scratch(&inst->call, inst->plant_scratch);
 
     inst->log_mask = (1u << MW_LOG_WARNING) | (1u << MW_LOG_DISCARD) | (1u << MW_LOG_ERROR) | (1u << MW_LOG_FATAL);
     if (logging_on) inst->log_mask |= 1u << MW_LOG_CALLS;
@@ -348,66 +350,36 @@ int mw_directional(MwInstance *inst, int need_dxdot, int need_dy) {
 /* ------------------------------------------------------------------ modes */
 
 int mw_events(MwInstance *inst, const double *x, double *z) {
-    if (inst->model->nz == 0) return 0;
+    size_t i;
     set_args(inst, x);
-    inst->res[0] = z;
-    return inst->model->events.eval(inst->arg, inst->res, inst->iw, inst->w, 0) == 0 ? 0 : -1;
+    /* the modes may have been set since the rule last looked (an FMU state restored): which function applies */
+    inst->call.any_stuck = 0;
+    for (i = 0; i < inst->model->nz; i++) inst->call.any_stuck |= inst->m[i] == 0.0;
+    return mw_plant_events(&inst->call, x, z) == MW_PLANT_OK ? 0 : -1;
 }
 
-int mw_settle_modes(MwInstance *inst, int *changed, int *x_changed) {
-    const size_t nx = inst->model->nx, nz = inst->model->nz;
-    size_t pass;
-    *changed = 0;
-    *x_changed = 0;
-    if (nz == 0) return 0;
-    for (pass = 0; pass < 2 * nz + 2; pass++) {
-        set_args(inst, inst->x);
-        inst->res[0] = inst->next;
-        inst->res[1] = inst->next + nz;
-        if (inst->model->update.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
-        if (memcmp(inst->next, inst->m, nz * sizeof(double)) == 0 &&
-            memcmp(inst->next + nz, inst->x, nx * sizeof(double)) == 0)
-            return 0;
-        if (memcmp(inst->next + nz, inst->x, nx * sizeof(double)) != 0) *x_changed = 1;
-        memcpy(inst->m, inst->next, nz * sizeof(double));
-        memcpy(inst->x, inst->next + nz, nx * sizeof(double));
-        *changed = 1;
-        mw_invalidate(inst);
-    }
-    return -2;
+const char *mw_singular_problem(MwInstance *inst, const double *x, char *what, size_t len) {
+    const size_t n = inst->plant.npiv;
+    size_t i, at;
+    if (n == 0) return NULL;
+    set_args(inst, x);
+    memcpy(inst->call.fault_x, x, inst->model->nx * sizeof(double));
+    if (mw_plant_diagnose(&inst->call) != MW_PLANT_SINGULAR) return NULL;
+    at = (size_t)snprintf(what, len, "the inertia matrix B(q) is singular at joint %d (it moves no mass and has no "
+                          "motor inertia there) at t = %.17g, q = [", inst->call.fault_joint, inst->time);
+    for (i = 0; i < n && at < len; i++) at += (size_t)snprintf(what + at, len - at, i ? ", %.9g" : "%.9g", x[i]);
+    if (at < len) snprintf(what + at, len - at, "]");
+    return what;
 }
 
-int mw_start_modes(MwInstance *inst) {
-    int changed, x_changed;
-    if (inst->model->nz == 0) return 0;
-    inst->arg[0] = inst->x;
-    inst->arg[1] = inst->u;
-    inst->arg[2] = inst->p;
-    inst->res[0] = inst->m;
-    if (inst->model->start.eval(inst->arg, inst->res, inst->iw, inst->w, 0) != 0) return -1;
-    mw_invalidate(inst);
-    return mw_settle_modes(inst, &changed, &x_changed);
+MwStatus mw_check_derivatives(MwInstance *inst, const char *fn, const double *v, size_t n) {
+    char what[512];
+    if (mw_all_finite(v, n)) return MW_OK;
+    if (mw_singular_problem(inst, inst->x, what, sizeof(what)) != NULL) return mw_fail(inst, fn, what);
+    return mw_non_finite(inst, fn, "the derivatives", v, n);
 }
 
 /* -------------------------------------------------------------- integrator */
-
-/* One classical Runge-Kutta step of length hs from inst->x, in place; inputs held. */
-static int rk4_step(MwInstance *inst, double hs) {
-    size_t i, nx = inst->model->nx;
-    double *x = inst->x, *s = inst->x_stage;
-    double *k1 = inst->k1, *k2 = inst->k2, *k3 = inst->k3, *k4 = inst->k4;
-    const double half = 0.5 * hs, sixth = hs / 6.0;
-
-    if (eval_ode(inst, x, k1) != 0) return -1;
-    for (i = 0; i < nx; i++) s[i] = x[i] + half * k1[i];
-    if (eval_ode(inst, s, k2) != 0) return -1;
-    for (i = 0; i < nx; i++) s[i] = x[i] + half * k2[i];
-    if (eval_ode(inst, s, k3) != 0) return -1;
-    for (i = 0; i < nx; i++) s[i] = x[i] + hs * k3[i];
-    if (eval_ode(inst, s, k4) != 0) return -1;
-    for (i = 0; i < nx; i++) x[i] += sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-    return 0;
-}
 
 unsigned long long mw_substeps(double h, double h_int) {
     double ratio = h / h_int;
@@ -419,56 +391,6 @@ unsigned long long mw_substeps(double h, double h_int) {
     if (n_real < 1.0) n_real = 1.0;
     if (!(n_real <= (double)MW_MAX_SUBSTEPS)) return 0;
     return (unsigned long long)n_real;
-}
-
-/* Whether an indicator went from positive to not positive. */
-static int crossed(const double *z0, const double *z1, size_t nz) {
-    size_t i;
-    for (i = 0; i < nz; i++) {
-        if (z0[i] > 0.0 && !(z1[i] > 0.0)) return 1;
-    }
-    return 0;
-}
-
-/*
- * One sub-step of length hs from inst->x with event location: an RK4 step; if an event
- * indicator crossed zero, bisection on the step length finds the first crossing (to a
- * relative 1e-12 of hs), the modes are updated there and the rest of the sub-step is
- * taken the same way. 0 on success, -1 if the model failed or the state is not finite,
- * -2 if the modes did not settle, -3 if events did not stop (more than 64 in one sub-step).
- */
-static int substep(MwInstance *inst, double hs) {
-    const size_t nx = inst->model->nx, nz = inst->model->nz;
-    double remaining = hs;
-    int events = 0;
-    while (remaining > 0.0) {
-        double lo = 0.0, hi = 1.0;
-        int it, changed, x_changed, status;
-        if (nz == 0) return rk4_step(inst, remaining) == 0 && mw_all_finite(inst->x, nx) ? 0 : -1;
-        if (mw_events(inst, inst->x, inst->z0) != 0) return -1;
-        memcpy(inst->next + nz, inst->x, nx * sizeof(double)); /* the start of this piece */
-        if (rk4_step(inst, remaining) != 0 || !mw_all_finite(inst->x, nx)) return -1;
-        if (mw_events(inst, inst->x, inst->z1) != 0) return -1;
-        if (!crossed(inst->z0, inst->z1, nz)) return 0;
-        for (it = 0; it < 60 && (hi - lo) > 1e-12; it++) {
-            double mid = 0.5 * (lo + hi);
-            memcpy(inst->x, inst->next + nz, nx * sizeof(double));
-            if (rk4_step(inst, mid * remaining) != 0 || !mw_all_finite(inst->x, nx)) return -1;
-            if (mw_events(inst, inst->x, inst->z1) != 0) return -1;
-            if (crossed(inst->z0, inst->z1, nz)) {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        memcpy(inst->x, inst->next + nz, nx * sizeof(double));
-        if (rk4_step(inst, hi * remaining) != 0 || !mw_all_finite(inst->x, nx)) return -1;
-        status = mw_settle_modes(inst, &changed, &x_changed);
-        if (status != 0) return status;
-        remaining -= hi * remaining;
-        if (++events > 64) return -3;
-    }
-    return 0;
 }
 
 unsigned long long mw_ticks(const MwModel *model, double h) {
@@ -540,11 +462,20 @@ static int tick(MwInstance *inst) {
     return 0;
 }
 
+static const char *rule_problem(int status) {
+    switch (status) {
+    case MW_PLANT_EVAL: return "the model failed to evaluate";
+    case MW_PLANT_UNSETTLED: return "the friction modes did not settle";
+    case MW_PLANT_CHATTER: return "more than 64 friction events in one sub-step";
+    default: return "the state became non-finite";
+    }
+}
+
 MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h) {
     const size_t nx = inst->model->nx, nz = inst->model->nz, nd = inst->model->nd;
-    unsigned long long ticks = 1, n = 1, j, k = 0;
-    int changed, x_changed, status;
-    char what[256];
+    unsigned long long ticks = 1, n = 1, j = 0;
+    int status;
+    char what[512];
     const char *problem = mw_step_plan(inst, tc, h, &ticks, &n, what, sizeof(what));
     double hs;
 
@@ -557,23 +488,36 @@ MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h) {
     if (nd > 0) memcpy(inst->d_save, inst->d, nd * sizeof(double));
     mw_invalidate(inst);
     /* inputs or parameters may have changed since the last step: the modes follow them first */
-    status = mw_settle_modes(inst, &changed, &x_changed);
+    set_args(inst, inst->x);
+    inst->call.fault_substep = 0;
+    status = mw_plant_settle(&inst->call, inst->x, NULL, NULL);
     for (j = 0; j < ticks && status == 0; j++) {
-        if (nd > 0) status = tick(inst); /* the sampled states: once per period, at its start */
-        for (k = 0; k < n && status == 0 && nx > 0; k++) status = substep(inst, hs);
+        if (nd > 0) {
+            status = tick(inst) == 0 ? MW_PLANT_OK : MW_PLANT_NONFINITE; /* the sampled states: once per period */
+            set_args(inst, inst->x);
+        }
+        if (status == 0 && nx > 0) status = mw_plant_substeps(&inst->call, inst->x, hs, n);
     }
+    if (status == MW_PLANT_NONFINITE && nx > 0) status = mw_plant_diagnose(&inst->call);
     if (status != 0) {
         if (nx > 0) memcpy(inst->x, inst->x_save, nx * sizeof(double));
         if (nz > 0) memcpy(inst->m, inst->m_save, nz * sizeof(double));
         if (nd > 0) memcpy(inst->d, inst->d_save, nd * sizeof(double));
         mw_invalidate(inst);
         inst->last_successful_time = tc;
+        if (status == MW_PLANT_SINGULAR) {
+            size_t at = (size_t)snprintf(what, sizeof(what), "the inertia matrix B(q) is singular at joint %d (it "
+                                         "moves no mass and has no motor inertia there) in the step from t = %.17g, "
+                                         "q = [", inst->call.fault_joint, tc);
+            size_t i;
+            for (i = 0; i < inst->plant.npiv && at < sizeof(what); i++)
+                at += (size_t)snprintf(what + at, sizeof(what) - at, i ? ", %.9g" : "%.9g", inst->call.fault_x[i]);
+            if (at < sizeof(what)) snprintf(what + at, sizeof(what) - at, "]");
+            return mw_fail(inst, fn, what);
+        }
         mw_log(inst, MW_DISCARD, MW_LOG_DISCARD,
                "%s: %s in sub-step %llu of %llu of period %llu of %llu; the state at the communication point "
-               "%.17g is kept",
-               fn, status == -1 ? "the state became non-finite" :
-               status == -2 ? "the friction modes did not settle" : "more than 64 friction events",
-               k, n, j, ticks, tc);
+               "%.17g is kept", fn, rule_problem(status), inst->call.fault_substep, n, j, ticks, tc);
         inst->mode = MW_MODE_STEP_FAILED;
         return MW_DISCARD;
     }
@@ -898,14 +842,20 @@ MwStatus mw_non_finite(MwInstance *inst, const char *fn, const char *what, const
 
 /* ------------------------------------------------ mode changes of both versions */
 
-const char *mw_exit_initialization(MwInstance *inst) {
+const char *mw_exit_initialization(MwInstance *inst, char *what, size_t len) {
     int modes;
     mw_invalidate(inst);
-    modes = mw_start_modes(inst);
+    set_args(inst, inst->x);
+    modes = mw_plant_start(&inst->call, inst->x);
+    mw_invalidate(inst);
     if (modes != 0)
-        return modes == -1 ? "the model failed to compute the friction modes" : "the initial friction modes did not settle";
-    if (mw_update_derivatives(inst) != 0 || !mw_all_finite(inst->xdot, inst->model->nx))
-        return "the initial state and parameters give non-finite derivatives";
+        return modes == MW_PLANT_EVAL ? "the model failed to compute the friction modes"
+                                      : "the initial friction modes did not settle";
+    if (mw_update_derivatives(inst) != 0) return "the model failed to evaluate the derivatives";
+    if (!mw_all_finite(inst->xdot, inst->model->nx)) {
+        const char *singular = mw_singular_problem(inst, inst->x, what, len);
+        return singular != NULL ? singular : "the initial state and parameters give non-finite derivatives";
+    }
     inst->mode = inst->type == MW_MODEL_EXCHANGE ? MW_MODE_EVENT : MW_MODE_STEP_COMPLETE;
     return NULL;
 }
@@ -932,7 +882,9 @@ const char *mw_set_time(MwInstance *inst, double time, char *what, size_t len) {
 const char *mw_event_update(MwInstance *inst, int *x_changed) {
     int changed, status;
     /* the friction modes follow the state, inputs and parameters: a joint sticks or breaks loose */
-    status = mw_settle_modes(inst, &changed, x_changed);
+    set_args(inst, inst->x);
+    status = mw_plant_settle(&inst->call, inst->x, &changed, x_changed);
+    if (changed) mw_invalidate(inst);
     if (status == 0) return NULL;
-    return status == -1 ? "the model failed to update the friction modes" : "the friction modes did not settle";
+    return status == MW_PLANT_EVAL ? "the model failed to update the friction modes" : "the friction modes did not settle";
 }

@@ -1,6 +1,6 @@
 /*
  * One FMU instance: its storage, logging, model evaluation, the co-simulation
- * integrator and FMU-state snapshots. Used by fmi2_functions.c and
+ * step (the plant's fixed-step rule, model/dynamics/c/plant_step.c) and FMU-state snapshots. Used by fmi2_functions.c and
  * fmi3_functions.c, which own the state machines of FMI 2.0 and FMI 3.0 and the
  * argument checks; nothing here depends on the FMI version (no FMI header is
  * included: statuses, interface types and the importer's callbacks reach this
@@ -87,9 +87,13 @@ struct MwInstance {
     double *x, *u, *p, *m, *xdot, *y, *z, *d;
     int xdot_valid, y_valid, z_valid;
 
-    /* integrator and event scratch */
-    double *x_save, *x_stage, *k1, *k2, *k3, *k4;
-    double *m_save, *z0, *z1, *next; /* nz, nz, nz, nz + nx */
+    /* the plant's fixed-step rule (plant_step.h) on this instance's functions, work memory and m */
+    MwPlantFunctions plant;
+    MwPlantCall call;
+    double *plant_scratch;           /* mw_plant_scratch_size(&plant) */
+
+    /* what a failed step restores */
+    double *x_save, *m_save;         /* nx, nz */
     double *d_save, *d_next;         /* nd, nd */
 
     /* directional-derivative scratch; adjoint: seeds in dxdot and dy, sensitivities into dx, du, dp */
@@ -131,8 +135,8 @@ struct MwSnapshot {
 #define mw_is_close MW_SYMBOL(mw_is_close)
 #define mw_past_stop_time MW_SYMBOL(mw_past_stop_time)
 #define mw_events MW_SYMBOL(mw_events)
-#define mw_settle_modes MW_SYMBOL(mw_settle_modes)
-#define mw_start_modes MW_SYMBOL(mw_start_modes)
+#define mw_check_derivatives MW_SYMBOL(mw_check_derivatives)
+#define mw_singular_problem MW_SYMBOL(mw_singular_problem)
 #define mw_directional MW_SYMBOL(mw_directional)
 #define mw_adjoint MW_SYMBOL(mw_adjoint)
 #define mw_update_indicators MW_SYMBOL(mw_update_indicators)
@@ -220,22 +224,25 @@ MW_HIDDEN int mw_is_close(double a, double b);
 MW_HIDDEN int mw_past_stop_time(const MwInstance *inst, double t);
 /*
  * The co-simulation step from tc to tc + h, planned by mw_step_plan (a step it refuses is MW_ERROR through
- * mw_fail): the sample periods (1 without sampled states), each a tick of d then its RK4 sub-steps.
- * MW_DISCARD keeps the state at tc and puts the instance in MW_MODE_STEP_FAILED (fn: the calling FMI
- * function, for the messages).
+ * mw_fail): the friction modes settled, then the sample periods (1 without sampled states), each a tick of
+ * d then its RK4 sub-steps with event location (mw_plant_substeps). MW_DISCARD (a state that is not finite,
+ * modes that do not settle) keeps the state at tc and puts the instance in MW_MODE_STEP_FAILED; a singular
+ * inertia matrix is MW_ERROR naming the joint and q (fn: the calling FMI function, for the messages).
  */
 MW_HIDDEN MwStatus mw_do_step(MwInstance *inst, const char *fn, double tc, double h);
 
 /* The event indicators at state x (current u, p, m) into z; 0 on success. */
 MW_HIDDEN int mw_events(MwInstance *inst, const double *x, double *z);
 /*
- * Repeat the model's mode update until the modes and states stop changing: 0 on success
- * (*changed: whether anything changed, *x_changed: whether the states did), -1 if the model
- * failed, -2 if the modes did not settle within 2 nz + 2 passes.
+ * NULL, or (into what[len]) that the inertia matrix B(q) is singular at state x: the joint whose pivot is
+ * not positive and q, at the instance's time.
  */
-MW_HIDDEN int mw_settle_modes(MwInstance *inst, int *changed, int *x_changed);
-/* The model's start modes, then settled; as mw_settle_modes. */
-MW_HIDDEN int mw_start_modes(MwInstance *inst);
+MW_HIDDEN const char *mw_singular_problem(MwInstance *inst, const double *x, char *what, size_t len);
+/*
+ * The status of derivatives v[0..n-1] just computed at the instance's state: MW_OK if finite; MW_ERROR
+ * (logged, error mode) if B(q) is singular there, naming the joint and q; else MW_DISCARD (mw_non_finite).
+ */
+MW_HIDDEN MwStatus mw_check_derivatives(MwInstance *inst, const char *fn, const double *v, size_t n);
 
 /* Forward-mode derivatives: seeds dx, du, dp must be filled; 0 on success. */
 MW_HIDDEN int mw_directional(MwInstance *inst, int need_dxdot, int need_dy);
@@ -274,7 +281,7 @@ MW_HIDDEN int mw_mode_valid(const MwInstance *inst, unsigned int mode);
  * back in time in Event Mode) and the event update (NewDiscreteStates, UpdateDiscreteStates: settle
  * the friction modes, *x_changed whether the states jumped): NULL, or what is wrong.
  */
-MW_HIDDEN const char *mw_exit_initialization(MwInstance *inst);
+MW_HIDDEN const char *mw_exit_initialization(MwInstance *inst, char *what, size_t len);
 MW_HIDDEN const char *mw_set_time(MwInstance *inst, double time, char *what, size_t len);
 MW_HIDDEN const char *mw_event_update(MwInstance *inst, int *x_changed);
 

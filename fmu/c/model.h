@@ -11,8 +11,10 @@
  * directional derivatives of ode and out and their reverse-mode (adjoint)
  * products (m held). The nz event indicators z
  * are positive while the modes are valid. At an event, update(x, u, p, m)
- * gives the next modes and states (one pass; the wrapper repeats it until
- * nothing changes); start(x, u, p) gives the modes to begin from. The sampled
+ * gives the next modes and states (one pass; the plant's rule repeats it until
+ * nothing changes); start(x, u, p, m) gives the modes to begin from; active and
+ * pivots are those of model/dynamics/c/plant_step.h. Co-Simulation integrates
+ * them with that rule, the one every engine of the workbench runs. The sampled
  * states change once per sample_period only, at the start of each period:
  * d <- tick(x, u, p, d) with the inputs held over the period (zero-order hold);
  * they are never iterated. Every FMI
@@ -47,17 +49,8 @@
 #endif
 #define mw_model MW_SYMBOL(mw_model)
 
-/* Integer type of the CasADi generated code (its option casadi_int). */
-typedef long long int mw_int;
-
-/* Signature of a CasADi generated function and of its work-size query. */
-typedef int (*mw_eval_fn)(const double **arg, double **res, mw_int *iw, double *w, int mem);
-typedef int (*mw_work_fn)(mw_int *sz_arg, mw_int *sz_res, mw_int *sz_iw, mw_int *sz_w);
-
-typedef struct {
-    mw_eval_fn eval;
-    mw_work_fn work;
-} MwFunction;
+/* mw_int, MwFunction and the plant's fixed-step rule (model/dynamics/c/plant_step.h, shipped in sources/). */
+#include "plant_step.h"
 
 /* Where a variable lives. */
 typedef enum {
@@ -116,6 +109,7 @@ typedef struct {
     double sample_period;         /* s: tick runs once per period; 0 when nd = 0 */
     const double *d_start;        /* nd */
     MwFunction ode;               /* (x, u, p, m, d) -> xdot */
+    MwFunction ode_sliding;       /* (x, u, p, m, d) -> xdot where no mode is 0: ode's numbers without the masking */
     MwFunction out;               /* (x, u, p, m, d) -> y */
     MwFunction ode_dir;           /* (x, u, p, m, d, dx, du, dp) -> dxdot, forward mode (d held) */
     MwFunction out_dir;           /* (x, u, p, m, d, dx, du, dp) -> dy, forward mode (d held) */
@@ -123,8 +117,12 @@ typedef struct {
     MwFunction out_adj;           /* (x, u, p, m, d, wy) -> [ax; au; ap] = J_out^T wy, reverse mode */
     MwFunction tick;              /* (x, u, p, d) -> d_next, once per sample period */
     MwFunction events;            /* (x, u, p, m) -> z, nz indicators, > 0 while the modes hold */
+    MwFunction events_sliding;    /* (x, u, p, m) -> z where no mode is 0: events' numbers, less work */
     MwFunction update;            /* (x, u, p, m) -> (m_next, x_next): one pass of the mode update */
-    MwFunction start;             /* (x, u, p) -> m: the modes to begin from */
+    MwFunction start;             /* (x, u, p, m) -> m: the modes to begin from (m not read) */
+    MwFunction active;            /* (x, u, p, m) -> 1 if a mode can change, else 0 */
+    size_t npiv;                  /* pivots of the solve of the accelerations (0: none) */
+    MwFunction pivots;            /* (x, u, p, m) -> npiv LDL^T pivots: one not positive is a singular B(q) */
 } MwModel;
 
 /* Provided by the generated model_data.c. */

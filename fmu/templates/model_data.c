@@ -40,6 +40,7 @@ static const MwModel mw_model_data = {
     $sample_period,
     mw_d_start,
     {$ode, ${ode}_work},
+    {$ode_sliding, ${ode_sliding}_work},
     {$out, ${out}_work},
     {$ode_dir, ${ode_dir}_work},
     {$out_dir, ${out_dir}_work},
@@ -47,8 +48,12 @@ static const MwModel mw_model_data = {
     {$out_adj, ${out_adj}_work},
     {$tick, ${tick}_work},
     {$events, ${events}_work},
+    {$events_sliding, ${events_sliding}_work},
     {$update, ${update}_work},
     {$start, ${start}_work},
+    {$active, ${active}_work},
+    MW_NPIV,
+    {$pivots, ${pivots}_work},
 };
 
 const MwModel *mw_model(void) { return &mw_model_data; }

@@ -11,6 +11,7 @@
 #define MW_NY $ny
 #define MW_NZ $nz
 #define MW_ND $nd
+#define MW_NPIV $npiv
 #define MW_NVARS $nvars
 #define MW_NARRAYS $narrays
 

@@ -3,6 +3,7 @@
 from .core import Dynamics, NoCompilerWarning
 from .motors import MOTOR_MODELS
 from .parameters import DynamicsParameters, ParameterLayout, Payload, parameter_layout
+from ..errors import SingularDynamicsError
 from .symbolic import DynamicsFunctions, build_functions
 from .workspace import Workspace
 
@@ -14,6 +15,7 @@ __all__ = [
     "NoCompilerWarning",
     "ParameterLayout",
     "Payload",
+    "SingularDynamicsError",
     "Workspace",
     "build_functions",
     "parameter_layout",

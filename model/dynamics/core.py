@@ -21,6 +21,7 @@ from ..codegen import (BuildInfo, CompiledLibrary, CompilerNotFoundError, LazyLi
 from ..description import RobotDescription
 from .motors import check_motor_model
 from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
+from .singular import singular_dynamics_error, singular_joint
 from .symbolic import COMPILED_FUNCTIONS, DynamicsFunctions, build_functions
 from .workspace import Workspace
 
@@ -244,8 +245,23 @@ class Dynamics:
 
     def accel(self, q: Any, qd: Any, tau: Any, p: DynamicsParameters | None = None, *,
               ws: Workspace | None = None) -> np.ndarray:
-        """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)``."""
-        return self._point("accel", (q, qd, tau), ("q", "qd", "tau"), p, ws)
+        """(n,) joint accelerations ``B^-1 (tau - C qd - g - F)`` (the sliding law of friction: Coulomb 0 at
+        ``qd_i = 0``; stick or slip at rest is the plant's, :mod:`model.plant`).
+
+        Raises :class:`~model.dynamics.singular.SingularDynamicsError` (naming the joint and ``q``) where
+        B(q) is singular.
+        """
+        out = self._point("accel", (q, qd, tau), ("q", "qd", "tau"), p, ws)
+        if not math.isfinite(sum(out.tolist())):
+            self._check_singular(q, p, "")
+        return out
+
+    def _check_singular(self, q: Any, p: DynamicsParameters | None, where: str) -> None:
+        """Raise :class:`SingularDynamicsError` if B(q) is singular (called where a solve left finite numbers)."""
+        qv = _vector(q, self.n, "q", "joint values")
+        found = singular_joint(self.inertia(qv, p))
+        if found is not None:
+            raise singular_dynamics_error(self.description, found[0], qv, where)
 
     def _batch(self, name: str, values: tuple[Any, ...], names: tuple[str, ...],
                p: DynamicsParameters | None, width: int | None = None) -> np.ndarray:
@@ -277,5 +293,13 @@ class Dynamics:
         return self._batch("rne", (Q, QD, QDD), ("Q", "QD", "QDD"), p)
 
     def accel_batch(self, Q: Any, QD: Any, TAU: Any, p: DynamicsParameters | None = None) -> np.ndarray:
-        """(N, n) forward dynamics of N states given as (N, n) arrays, one compiled call."""
-        return self._batch("accel", (Q, QD, TAU), ("Q", "QD", "TAU"), p)
+        """(N, n) forward dynamics of N states given as (N, n) arrays, one compiled call.
+
+        Raises :class:`~model.dynamics.singular.SingularDynamicsError` naming the first row, its joint and
+        ``q`` where B(q) is singular.
+        """
+        out = self._batch("accel", (Q, QD, TAU), ("Q", "QD", "TAU"), p)
+        bad = np.flatnonzero(~np.isfinite(out).all(axis=1))
+        for k in bad:
+            self._check_singular(joint_batch(Q, self.n, "Q")[k], p, f"row {k} of accel_batch")
+        return out

@@ -4,16 +4,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-__all__ = ["ldl_solve_sx"]
+__all__ = ["ldl_solve_sx", "ldl_pivots_sx"]
 
 
-def ldl_solve_sx(B: ca.SX, rhs: ca.SX) -> ca.SX:
-    """Solve ``B x = rhs`` for a symmetric positive-definite (n, n) ``B`` by an unpivoted LDL^T.
-
-    Reads only the diagonal and the lower triangle of ``B``. Adds O(n^3) scalar operations to the graph (no cofactor expansion), so
-    the result stays code-generatable and small for n <= 10. No pivoting is
-    needed because the joint-space inertia matrix is positive definite.
-    """
+def _ldl(B: ca.SX) -> tuple[list[list[ca.SX]], list[ca.SX]]:
+    """Unpivoted ``B = L D L^T`` of the lower triangle of ``B``: ``(L, D)`` as nested lists of scalars."""
     n = B.shape[0]
     L = [[None] * n for _ in range(n)]
     D = [None] * n
@@ -27,6 +22,19 @@ def ldl_solve_sx(B: ca.SX, rhs: ca.SX) -> ca.SX:
             for k in range(j):
                 s = s - L[i][k] * L[j][k] * D[k]
             L[i][j] = s / d
+    return L, D
+
+
+def ldl_solve_sx(B: ca.SX, rhs: ca.SX) -> ca.SX:
+    """Solve ``B x = rhs`` for a symmetric positive-definite (n, n) ``B`` by an unpivoted LDL^T.
+
+    Reads only the diagonal and the lower triangle of ``B``. Adds O(n^3) scalar operations to the graph (no cofactor expansion), so
+    the result stays code-generatable and small for n <= 10. No pivoting is
+    needed because the joint-space inertia matrix is positive definite; a
+    pivot that is zero (a singular B) gives non-finite entries (see :func:`ldl_pivots_sx`).
+    """
+    n = B.shape[0]
+    L, D = _ldl(B)
     y = [None] * n
     for i in range(n):
         s = rhs[i]
@@ -40,3 +48,9 @@ def ldl_solve_sx(B: ca.SX, rhs: ca.SX) -> ca.SX:
             s = s - L[k][i] * x[k]
         x[i] = s
     return ca.vertcat(*x)
+
+
+def ldl_pivots_sx(B: ca.SX) -> ca.SX:
+    """(n, 1) pivots ``D`` of the unpivoted LDL^T of :func:`ldl_solve_sx`: all positive for a positive-definite
+    ``B``; the first that is not positive names the row (joint) at which ``B`` is singular."""
+    return ca.vertcat(*_ldl(B)[1])

@@ -16,7 +16,10 @@ Two motor models (``MOTOR_MODELS``):
 Friction (both models) is motor-side data reflected to the joint:
 ``F_i(qd) = G_i^2 B_i qd_i + |G_i| Tc_i(sign qd_i)`` with ``Tc+`` for
 ``qd > 0``, ``Tc-`` for ``qd < 0`` and 0 at ``qd = 0``; F is the torque the
-joint must supply to overcome friction (positive with ``qd``).
+joint must supply to overcome friction (positive with ``qd``). That is the
+law of a sliding joint; a joint at rest sticks or breaks loose by the friction
+modes of :mod:`model.dynamics.stick_slip`, which the plant (:mod:`model.plant`)
+integrates.
 """
 
 from __future__ import annotations
@@ -30,7 +33,8 @@ from ..chain import Chain
 from ..description import RobotDescription
 from ..kinematics import point_jacobian_sym
 
-__all__ = ["MOTOR_MODELS", "check_motor_model", "friction_sx", "rotor_energy_terms"]
+__all__ = ["MOTOR_MODELS", "check_motor_model", "coulomb_limits_sx", "friction_sx", "rotor_energy_terms",
+           "viscous_friction_sx"]
 
 MOTOR_MODELS: tuple[str, ...] = ("reflected", "full")
 
@@ -42,8 +46,22 @@ def check_motor_model(motor_model: str) -> str:
     return motor_model
 
 
+def viscous_friction_sx(gear_ratio: np.ndarray, qd: Any, viscous: Any) -> list[Any]:
+    """The n joint viscous friction torques ``G_i^2 B_i qd_i``, N m or N (motor-side ``viscous``, N m s/rad)."""
+    return [g * g * viscous[i] * qd[i] for i, g in enumerate(np.asarray(gear_ratio, dtype=float))]
+
+
+def coulomb_limits_sx(gear_ratio: np.ndarray, coulomb_pos: Any, coulomb_neg: Any) -> tuple[ca.SX, ca.SX]:
+    """(n, 1) joint-side Coulomb torques ``(|G| Tc+, |G| Tc-)``, N m or N, of the motor-side coefficients."""
+    G = ca.DM(np.abs(np.asarray(gear_ratio, dtype=float)))
+    return G * coulomb_pos, G * coulomb_neg
+
+
 def friction_sx(gear_ratio: np.ndarray, qd: Any, viscous: Any, coulomb_pos: Any, coulomb_neg: Any) -> ca.SX:
-    """(n, 1) joint friction torque F(qd), N m or N.
+    """(n, 1) joint friction torque F(qd), N m or N: viscous plus the Coulomb torque of the sign of ``qd``.
+
+    This is the sliding law (0 at ``qd_i = 0``); whether a joint at rest sticks is decided by the
+    friction modes of :mod:`model.dynamics.stick_slip`.
 
     Parameters
     ----------
@@ -55,9 +73,9 @@ def friction_sx(gear_ratio: np.ndarray, qd: Any, viscous: Any, coulomb_pos: Any,
         (n, 1) motor-side viscous (N m s/rad) and Coulomb (N m) coefficients.
     """
     terms = []
-    for i, g in enumerate(np.asarray(gear_ratio, dtype=float)):
+    for i, (g, visc) in enumerate(zip(np.asarray(gear_ratio, dtype=float), viscous_friction_sx(gear_ratio, qd, viscous))):
         coulomb = ca.if_else(qd[i] > 0, coulomb_pos[i], ca.if_else(qd[i] < 0, coulomb_neg[i], 0))
-        terms.append(g * g * viscous[i] * qd[i] + abs(g) * coulomb)
+        terms.append(visc + abs(g) * coulomb)
     return ca.vertcat(*terms)
 
 

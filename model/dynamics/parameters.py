@@ -262,7 +262,7 @@ class DynamicsParameters:
 
     @property
     def gravity(self) -> np.ndarray:
-        """(3,) gravitational acceleration in the base frame, m/s^2."""
+        """(3,) gravitational acceleration in the world frame W, m/s^2."""
         return self.field("gravity")
 
     def as_dict(self) -> dict[str, float]:
@@ -304,7 +304,7 @@ class DynamicsParameters:
         return self._replace(values)
 
     def with_gravity(self, gravity: Any) -> "DynamicsParameters":
-        """Gravitational acceleration in the base frame, (3,) m/s^2."""
+        """Gravitational acceleration in the world frame W, (3,) m/s^2."""
         return self._replace({"gravity": finite_vector(gravity, 3, "gravity")})
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from ..description import RobotDescription
 from .lagrange import lagrange_model
 from .linalg import ldl_solve_sx
-from .motors import check_motor_model, friction_sx
+from .motors import check_motor_model, friction_sx, viscous_friction_sx
 from .newton_euler import rne_sx
 from .parameters import SymbolicParameters, parameter_layout, split_parameters
 
@@ -43,10 +43,10 @@ __all__ = [
     "COMPILED_FUNCTIONS",
     "DynamicsFunctions",
     "LagrangeFunctions",
-    "accel_scaled_function",
     "build_functions",
     "build_lagrange_functions",
     "coriolis_ne_sx",
+    "plant_terms_sx",
 ]
 
 #: The Functions compiled for the numeric API (see :mod:`model.codegen`).
@@ -143,29 +143,32 @@ def _inertia_columns_ne(desc: RobotDescription, motor_model: str, q: ca.SX, para
     ])
 
 
-def _accel_sx(desc: RobotDescription, motor_model: str, s: "_Symbols", link_mass_scale: ca.SX | None = None,
-              B_cols: ca.SX | None = None) -> ca.SX:
+def _accel_sx(desc: RobotDescription, motor_model: str, s: "_Symbols", B_cols: ca.SX | None = None) -> ca.SX:
     """``B^-1 (tau - rne(q, qd, 0))`` by an LDL^T solve of the Newton-Euler inertia columns."""
     zero = ca.SX.zeros(desc.n, 1)
-    h = rne_sx(desc, motor_model, s.q, s.qd, zero, s.params, link_mass_scale=link_mass_scale)
+    h = rne_sx(desc, motor_model, s.q, s.qd, zero, s.params)
     if B_cols is None:
-        B_cols = _inertia_columns_ne(desc, motor_model, s.q, s.params, link_mass_scale)
+        B_cols = _inertia_columns_ne(desc, motor_model, s.q, s.params)
     return ldl_solve_sx(B_cols, s.tau - h)  # reads the lower triangle only: the unused entries are pruned
 
 
-def accel_scaled_function(desc: RobotDescription, motor_model: str = "reflected") -> ca.Function:
-    """``accel_scaled(q, qd, tau, p, link_mass_scale) -> qdd``: :attr:`DynamicsFunctions.accel` with every link's
-    mass and inertia times the scalar input ``link_mass_scale`` (centres of mass, rotors, payload unchanged).
+def plant_terms_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX, params: SymbolicParameters,
+                   link_mass_scale: ca.SX | None = None) -> tuple[ca.SX, ca.SX]:
+    """The pieces of the plant's dynamics: ``(B, h)``.
 
-    The same Newton-Euler construction as ``accel`` (at a scale of 1 it computes the same numbers), so one
-    compiled plant serves a sweep over link masses; a scaled description would need a build per value.
+    ``B`` (n, n): the Newton-Euler inertia columns (their lower triangle is B's, as ``accel`` reads it);
+    ``h`` (n, 1): ``rne(q, qd, 0)`` without Coulomb friction (Coriolis, gravity and viscous
+    friction), the torque the stick-slip law of :mod:`model.dynamics.stick_slip` takes from ``G u``.
+    ``link_mass_scale``: None (the description's links), or a symbolic factor on every link's mass and
+    inertia (centres of mass, rotors and payload unchanged): one compiled plant then serves a sweep over
+    link masses, where a scaled description would need a build per value.
     """
-    check_motor_model(motor_model)
-    s = _Symbols(desc)
-    scale = ca.SX.sym("link_mass_scale")
-    qdd = _accel_sx(desc, motor_model, s, scale)
-    return ca.Function("accel_scaled", [s.q, s.qd, s.tau, s.p, scale], [ca.densify(ca.cse(qdd))],
-                       ["q", "qd", "tau", "p", "link_mass_scale"], ["qdd"])
+    zero = ca.SX.zeros(desc.n, 1)
+    gear = np.array([lk.gear_ratio for lk in desc.links])
+    B_cols = _inertia_columns_ne(desc, motor_model, q, params, link_mass_scale)
+    rigid = rne_sx(desc, motor_model, q, qd, zero, params, with_friction=False, link_mass_scale=link_mass_scale)
+    h = rigid + ca.vertcat(*viscous_friction_sx(gear, qd, params.viscous_friction))
+    return B_cols, h
 
 
 def coriolis_ne_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX, params: SymbolicParameters,

@@ -28,7 +28,7 @@ def scara_table():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
         robot = load_robot("scara")
-    return build_table(spec_from_plant(build_plant(robot), robot, 1e-3))
+    return build_table(spec_from_plant(build_plant(robot), 1e-3))
 
 
 def _md(path: Path) -> ET.Element:
@@ -139,7 +139,8 @@ def test_model_description_capabilities_and_experiment():
         assert node.get("canGetAndSetFMUstate") == "true" and node.get("canSerializeFMUstate") == "true"
         assert node.get("providesDirectionalDerivative") == "true"
         files = [f.get("name") for f in node.find("SourceFiles")]
-        assert files == ["fmi2_functions.c", "instance.c", "model_data.c", "scara_casadi.c"]
+        # the wrapper, the plant's fixed-step rule (model/dynamics/c/plant_step.c), the generated model
+        assert files == ["fmi2_functions.c", "instance.c", "plant_step.c", "model_data.c", "scara_casadi.c"]
     assert root.find("CoSimulation").get("canHandleVariableCommunicationStepSize") == "true"
     assert root.find("DefaultExperiment").get("stepSize") == "0.001"
     assert root.get("variableNamingConvention") == "structured"
@@ -299,13 +300,16 @@ def test_the_description_digest_is_recorded_and_a_modified_robot_is_reloaded_fro
 
 
 def test_wrapper_compiles_cleanly_with_pedantic_warnings(tmp_path):
-    """The hand-written wrapper also compiles with -Wpedantic -Wshadow -Wstrict-prototypes."""
+    """The hand-written wrapper and the plant's fixed-step rule it calls also compile with -Wpedantic -Wshadow
+    -Wstrict-prototypes."""
     from fmu.build import fmi_headers_dir
+    from model.codegen import C_DIR as MODEL_C_DIR
 
-    for name in ("fmi2_functions.c", "instance.c"):
+    for source in (C_DIR / "fmi2_functions.c", C_DIR / "instance.c", MODEL_C_DIR / "plant_step.c"):
         proc = subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow",
-                               "-Wstrict-prototypes", "-Werror", f"-I{C_DIR}", f"-I{fmi_headers_dir()}", "-c",
-                               str(C_DIR / name), "-o", str(tmp_path / "x.o")], capture_output=True, text=True)
+                               "-Wstrict-prototypes", "-Werror", f"-I{C_DIR}", f"-I{MODEL_C_DIR}",
+                               f"-I{fmi_headers_dir()}", "-c", str(source), "-o", str(tmp_path / "x.o")],
+                              capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
 
 

@@ -1,5 +1,6 @@
 """Stick-slip Coulomb friction in the FMU: the Puma 560 through FMPy (Model Exchange with CVode, Co-Simulation
-with RK4) against the Python reference integrator of the same law (fmu/reference.py).
+with the plant's fixed-step rule) against the test oracle of the same law (tests/support/stick_slip_oracle.py:
+NumPy, events located by solve_ivp).
 
 The arm rests at its rest pose with gravity held by a constant motor torque;
 joint 1 (vertical axis) gets torque pulses above, below and across its static
@@ -17,11 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.reference import coulomb_limits, simulate_stick_slip
+from tests.support.stick_slip_oracle import coulomb_limits, simulate_stick_slip
 from fmu.simulate import simulate_cs, simulate_me, step_input
 from fmu.validate import TorqueProfile
 from model import InertiaConsistencyWarning, load_robot
-from model.plant import build_plant
 
 from tests.support.fmu_support import puma_fmu
 
@@ -88,19 +88,16 @@ def test_puma_with_real_friction_matches_the_stick_slip_reference(interface, tmp
 
 
 def test_the_old_sign_law_would_miss_by_far_more_than_the_tolerance():
-    """Negative control: qd-sign Coulomb friction without stick (the plant's smooth ODE) integrated the same
-    way leaves the stick-slip reference by orders of magnitude more than the tolerances above."""
+    """Negative control: qd-sign Coulomb friction without stick (``robot.accel``, the sliding law) integrated
+    the same way leaves the stick-slip reference by orders of magnitude more than the tolerances above."""
     robot, profile, ref = scenario()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", InertiaConsistencyWarning)
-        plant = build_plant(robot)
     # Fixed-step RK4 at 0.1 ms over the first two holds (an adaptive solver chatters without end on the
     # sign switch: that is the bug this law replaces), sampled at the hold ends.
-    ode, p = plant.ode, np.asarray(plant.param_defaults, dtype=float)
-    x, h, t, X = np.asarray(plant.x0, dtype=float).copy(), 1e-4, [], []
+    G = robot.gear_ratio
+    x, h, t, X = np.concatenate([robot.q_rest, np.zeros(N)]), 1e-4, [], []
     for k in range(2):
         u = profile.tau_m[k]
-        f = lambda xv, u=u: np.asarray(ode(xv, u, p)).reshape(-1)  # noqa: E731
+        f = lambda xv, u=u: np.concatenate([xv[N:], robot.accel(xv[:N], xv[N:], G * u)])  # noqa: E731
         for _ in range(int(round(HOLD / h))):
             k1 = f(x)
             k2 = f(x + 0.5 * h * k1)

@@ -2,8 +2,10 @@
 
 Input: the computed-torque feed-forward of the seed's pick-and-place, first
 segment (rest to A, 3 s), held for 10 ms at a time. Open loop, so the horizon
-stays short; the reference is the same plant integrated by solve_ivp (DOP853,
-rtol 1e-11) one hold interval at a time.
+stays short; the reference is the one plant (model/plant.py) advanced by its
+fixed-step rule at an eighth of the FMU's internal step, one hold interval at a
+time (fmu.validate.reference_response). Model Exchange (CVode) is the
+independent integrator of the comparison.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ def scenario():
         robot = load_robot("scara")
     plant = build_plant(robot)
     profile = feedforward_profile(robot, t_end=3.0, hold=0.01)
-    t_ref, X_ref = reference_response(plant, profile)
+    t_ref, X_ref = reference_response(robot, profile)
     u_last = np.vstack([profile.tau_m, profile.tau_m[-1]])
     P_ref = np.array([np.asarray(plant.out(x, u, plant.param_defaults)).reshape(-1)[3 * N:3 * N + 3]
                       for x, u in zip(X_ref, u_last)])
@@ -161,10 +163,10 @@ def test_validate_flags_a_wrong_model(scenario, monkeypatch):
     _, plant, *_ = scenario
     original = v.reference_response
 
-    def wrong(plant_, profile, p=None, **kw):
-        p = np.array(plant_.param_defaults, dtype=float)
-        p[list(plant_.param_names).index("viscous_friction[1]")] *= 2.0
-        return original(plant_, profile, p=p, **kw)
+    def wrong(robot, profile, p=None, **kw):
+        p = np.array(robot.parameters.vector, dtype=float)
+        p[list(robot.parameters.layout.names).index("viscous_friction[1]")] *= 2.0
+        return original(robot, profile, p=p, **kw)
 
     monkeypatch.setattr(v, "reference_response", wrong)
     with warnings.catch_warnings():

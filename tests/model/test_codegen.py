@@ -98,12 +98,17 @@ def test_plant_functions_compile_with_strict_flags(tmp_path):
     from model.plant import build_plant
 
     plant = build_plant(_robot("scara"))
-    library, info = build_library("plant-test", "scara-plant", lambda: [plant.ode, plant.out], directory=tmp_path)
+    library, info = build_library("plant-test", "scara-plant", lambda: [plant.ode, plant.out, plant.events,
+                                                                       plant.update], directory=tmp_path)
     assert "-Werror" in info.flags and "-ffp-contract=off" in info.flags and info.flags == GENERATED_CFLAGS
     x = plant.x0 + 0.1
     u = np.array([0.5, -0.2, 0.1, 0.05])
-    xdot = library.evaluate("ode", [x, u, plant.param_defaults], 1)[0][0]
-    np.testing.assert_allclose(xdot, np.array(plant.ode(x, u, plant.param_defaults)).ravel(), rtol=1e-12, atol=1e-12)
+    m = np.array([1.0, -1.0, 0.0, 1.0])
+    xdot = library.evaluate("ode", [x, u, plant.param_defaults, m], 1)[0][0]
+    np.testing.assert_allclose(xdot, np.array(plant.ode(x, u, plant.param_defaults, m)).ravel(), rtol=1e-12,
+                               atol=1e-12)
+    z = library.evaluate("events", [x, u, plant.param_defaults, m], 1)[0][0]
+    np.testing.assert_allclose(z, np.array(plant.events(x, u, plant.param_defaults, m)).ravel(), rtol=1e-12)
 
 
 def test_named_functions_as_dict():

@@ -116,3 +116,24 @@ def test_the_plant_jacobians_are_built_once_per_robot_and_follow_the_parameters(
     assert np.abs(heavy.B - first.B).max() > 1e-3 * np.abs(first.B).max()  # the payload changed B
     np.testing.assert_array_equal(heavy.A, reference.A)
     np.testing.assert_array_equal(heavy.B, reference.B)
+
+
+def test_linearisation_is_the_plants_in_the_modes_it_states():
+    """At rest the default is the sliding modes (+1): the joint that moves, what the designs use (A and B those of
+    the sliding law, robot.accel: the central differences above); a 0 in ``modes`` is the stuck joint, whose rows
+    of A and B vanish (it does not move under small inputs) while the other joints keep theirs."""
+    from model import InputError
+
+    robot = _robot("puma560")
+    n = robot.n
+    q0 = robot.q_rest + 0.1
+    sliding = linearise(robot, q0)
+    A_fd, B_fd = finite_difference_AB(robot, q0, np.zeros(n), robot.rne(q0, np.zeros(n), np.zeros(n)) / robot.gear_ratio)
+    np.testing.assert_allclose(sliding.B, B_fd, rtol=0, atol=1e-6 * np.abs(B_fd).max())
+    modes = np.ones(n)
+    modes[1] = 0.0
+    stuck = linearise(robot, q0, modes=modes)
+    assert np.all(stuck.A[[1, n + 1], :] == 0) and np.all(stuck.B[[1, n + 1], :] == 0)
+    assert np.abs(stuck.B[n]).max() > 1e-3 and not np.allclose(stuck.B[n], sliding.B[n])  # joint 1 sees 2 held
+    with pytest.raises(InputError, match="modes: expected -1, 0 or \\+1 per joint, 0 only where qd0 = 0"):
+        linearise(robot, q0, qd0=np.full(n, 0.1), modes=modes)

@@ -1,10 +1,17 @@
-"""The stick-slip reference integrator (fmu/reference.py) against closed forms and physical invariants.
+"""The stick-slip law: the plant's fixed-step rule and the test oracle against closed forms and invariants.
+
+The law lives in model/dynamics/stick_slip.py and is integrated by the plant's rule
+(model/dynamics/c/plant_step.c: RK4 sub-steps, events located by bisection); the test
+oracle (tests/support/stick_slip_oracle.py) writes it again in NumPy and locates the
+events with solve_ivp. Both are checked here against what no one here wrote:
 
 1. One joint about a vertical axis (no gravity torque, constant inertia B, no
    viscous friction) under a piecewise-constant torque: every phase has a
    closed form (constant acceleration while sliding, rest while stuck), and the
    times of sticking and breaking loose follow from it (the stick event fires
-   once the velocity has overshot zero by V_EPS = 1e-6 rad/s).
+   once the velocity has overshot zero by V_EPS = 1e-6 rad/s). RK4 is exact on
+   these quadratics, so the rule meets the closed form to rounding and the event
+   time to its bisection (1e-12 of a 1 ms sub-step); the oracle to its tolerance.
 2. The planar 2R arm with Coulomb friction under a torque that makes joint 2
    stick and slip: while stuck, qd = 0 exactly and the holding torque stays
    within [Tc-, Tc+]; while sliding, the friction is the Coulomb torque of the
@@ -20,8 +27,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.friction_modes import V_EPS
-from fmu.reference import coulomb_limits, simulate_stick_slip
+from model.dynamics.stick_slip import V_EPS
+from tests.support.stick_slip_oracle import coulomb_limits, simulate_stick_slip
 from fmu.validate import TorqueProfile
 from model import InertiaConsistencyWarning, Robot
 from model.description import description_from_dict
@@ -42,15 +49,9 @@ def profile(t_switch, tau_m, t_end) -> TorqueProfile:
                          np.zeros((len(t_switch) + 1, tau_m.shape[1])), "test profile")
 
 
-def test_one_joint_matches_the_closed_form_through_slip_stick_hold_and_break():
-    robot = one_joint()
+def _closed_form_one_joint():
+    """B, the closed form (q, qd, friction) of the one-joint scenario and its stick time."""
     B = 0.05 + 2.0 * 0.25 ** 2 + 1e-4 * 50.0 ** 2          # izz + m r^2 + Jm G^2 = 0.425 kg m^2
-    assert robot.inertia([0.0])[0, 0] == pytest.approx(B, rel=1e-12)
-    tc_pos, tc_neg = coulomb_limits(robot)
-    assert (tc_pos[0], tc_neg[0]) == (1.0, -1.5)           # |G| x motor side
-    # joint torques G tau_m: 2.0 (slides), 0 (decelerates, sticks at t = 1), -1.25 (held), -2.5 (breaks loose)
-    res = simulate_stick_slip(robot, profile([0.0, 0.5, 1.5, 2.0], [[0.04], [0.0], [-0.025], [-0.05]], 3.0))
-
     a1, a2, a4 = (2.0 - 1.0) / B, -1.0 / B, (-2.5 + 1.5) / B
     v1 = a1 * 0.5
     t_stick = 0.5 + v1 / -a2
@@ -66,6 +67,48 @@ def test_one_joint_matches_the_closed_form_through_slip_stick_hold_and_break():
             return q_stick, 0.0, 0.0 if t <= 1.5 else -1.25   # at a switching time: the value held before it
         s = t - 2.0
         return q_stick + a4 * s ** 2 / 2, a4 * s, -1.5
+
+    return B, closed_form, t_stick, a2
+
+
+ONE_JOINT_PROFILE = ([0.0, 0.5, 1.5, 2.0], [[0.04], [0.0], [-0.025], [-0.05]], 3.0)
+
+
+def test_the_plants_rule_matches_the_closed_form_through_slip_stick_hold_and_break():
+    """The rule every engine runs, at 1 ms sub-steps and 10 ms holds: the closed form to 1e-12 (rad, rad/s; RK4 is
+    exact on quadratics, the stick event is bisected to 1e-12 of a 1 ms sub-step and overshoots by V_EPS / |a| = 4e-7 s, so the
+    velocity is off the closed form by at most V_EPS = 1e-6 around it: those samples are compared to V_EPS)."""
+    from model.compiled_plant import compiled_plant
+
+    robot = one_joint()
+    B, closed_form, t_stick, a2 = _closed_form_one_joint()
+    t_switch, tau, t_end = ONE_JOINT_PROFILE
+    run = compiled_plant(robot).run(robot.parameters.vector)
+    t = np.arange(0, 301) * 0.01
+    run.start(np.zeros(2), tau[0])
+    X = [run.x.copy()]
+    for k in range(300):
+        held = tau[int(np.searchsorted(t_switch, t[k] + 1e-12, side="right")) - 1]
+        assert run.advance(held, 0.01, 10)
+        X.append(run.x.copy())
+    X = np.array(X)
+    expected = np.array([closed_form(tk) for tk in t])
+    near = np.abs(t - t_stick) < 0.011
+    assert np.max(np.abs(X[:, 0] - expected[:, 0])) < 1e-12
+    assert np.max(np.abs(X[~near, 1] - expected[~near, 1])) < 1e-12
+    assert np.max(np.abs(X[near, 1] - expected[near, 1])) <= V_EPS
+    stuck = (t > t_stick + 1e-3) & (t <= 2.0)
+    assert np.all(X[stuck, 1] == 0.0) and np.all(X[(t > 2.0), 1] < 0)
+
+
+def test_the_oracle_matches_the_closed_form_through_slip_stick_hold_and_break():
+    robot = one_joint()
+    B, closed_form, t_stick, a2 = _closed_form_one_joint()
+    assert robot.inertia([0.0])[0, 0] == pytest.approx(B, rel=1e-12)
+    tc_pos, tc_neg = coulomb_limits(robot)
+    assert (tc_pos[0], tc_neg[0]) == (1.0, -1.5)           # |G| x motor side
+    # joint torques G tau_m: 2.0 (slides), 0 (decelerates, sticks at t = 1), -1.25 (held), -2.5 (breaks loose)
+    res = simulate_stick_slip(robot, profile(*ONE_JOINT_PROFILE))
 
     expected = np.array([closed_form(t) for t in res.t])
     # DOP853 at rtol 1e-10 on polynomials of degree 2: errors at rounding level; 1e-9 leaves a wide margin

@@ -1,13 +1,15 @@
-"""Reference integrator of an arm with stick-slip Coulomb friction (Python, event-located).
+"""The test oracle of the stick-slip plant: an arm with stick-slip Coulomb friction in NumPy, event-located.
 
-The law is the FMU's, stated in :mod:`fmu.friction_modes`: per joint a mode
+No product code uses it. The law is the plant's, stated in :mod:`model.dynamics.stick_slip`: per joint a mode
 (sliding forward, sliding backward, stuck), the accelerations of the free
 joints and the holding torques of the stuck ones from one masked solve, event
 indicators positive while the modes hold, and the same mode update, repeated
 until nothing changes. Here it is written again with NumPy, and the events are
 located by :func:`scipy.integrate.solve_ivp` (DOP853), one hold interval of the
 piecewise-constant torque at a time: an independent integration of the same
-law, against which the FMU's RK4 (with bisection on the indicators) and the
+law (written again here, from the docstring, with NumPy and a general
+solve instead of the plant's masked LDL^T), against which the plant's
+fixed-step rule (RK4 with bisection on the indicators, in every engine) and the
 importers' integrators (CVode with root finding) are compared.
 """
 
@@ -18,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .friction_modes import A_EPS, F_EPS, V_EPS
+from model.dynamics.stick_slip import A_EPS, F_EPS, V_EPS
 
 __all__ = ["StickSlipResult", "coulomb_limits", "mode_dynamics", "indicators", "update_modes", "settle_modes",
            "start_modes", "simulate_stick_slip"]
@@ -57,7 +59,7 @@ def mode_dynamics(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.n
 
 def indicators(qd: np.ndarray, f: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray,
                modes: np.ndarray) -> np.ndarray:
-    """Event indicators, positive while the modes hold (see :mod:`fmu.friction_modes`)."""
+    """Event indicators, positive while the modes hold (see :mod:`model.dynamics.stick_slip`)."""
     sliding = modes * qd + V_EPS
     stuck = np.minimum(tc_pos - f, f - tc_neg) + F_EPS * (tc_pos - tc_neg)
     return np.where(tc_pos - tc_neg > 0, np.where(modes != 0, sliding, stuck), 1.0)
@@ -65,7 +67,7 @@ def indicators(qd: np.ndarray, f: np.ndarray, tc_pos: np.ndarray, tc_neg: np.nda
 
 def update_modes(B: np.ndarray, r: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray, modes: np.ndarray,
                  qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One pass of the mode update: ``(modes, qd)`` next (see :mod:`fmu.friction_modes`)."""
+    """One pass of the mode update: ``(modes, qd)`` next (see :mod:`model.dynamics.stick_slip`)."""
     qdd, f = mode_dynamics(B, r, tc_pos, tc_neg, modes)
     has_c = tc_pos - tc_neg > 0
     a_tol = A_EPS * (1.0 + np.max(np.abs(qdd)))
@@ -112,7 +114,8 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
         A :class:`model.Robot`; its Coulomb friction follows the law of this module, the rest of its
         dynamics (viscous friction included) is ``robot.dynamics``.
     profile
-        A :class:`fmu.validate.TorqueProfile` (``t_switch``, ``tau_m`` motor side, ``t_end``).
+        Piecewise-constant motor torques: ``t_switch`` (K,), ``tau_m`` (K, n) motor side, ``t_end``
+        (e.g. a :class:`fmu.validate.TorqueProfile`).
     x0
         Initial state ``[q; qd]``; default rest, at rest.
     rtol, atol
