@@ -43,6 +43,7 @@ import numpy as np
 from model.files import atomic_path, write_atomic
 
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
+from model.errors import ToolchainError
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
            "nominal_run", "rerun_case", "run_cases", "summarise", "sweep"]
@@ -379,6 +380,11 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
     setup = case_setup(spec)  # builds (or loads) the kernel here, once, before any worker needs it
     robot = setup.robot
     check_joints(spec, robot.n)
+    if spec.task is None and spec.waypoints is None:
+        from control_design.reference import reference_task_name, reference_task_rule
+
+        print(f"sweep: no task in the spec: following {reference_task_name(robot)!r} ({reference_task_rule(robot)})",
+              file=stream, flush=True)
     joints = tuple(lk.name or f"joint{i + 1}" for i, lk in enumerate(robot.description.links))
     units = tuple("rad" if lk.is_revolute else "m" for lk in robot.description.links)
     # a case that cannot be set up (e.g. a rate too slow for a bandwidth) fails here, before the cluster starts
@@ -424,7 +430,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
                         client.close()
         table = assemble(spec, joints, done)
         if len(table) != spec.n_cases:  # pragma: no cover - every task either returned or raised
-            raise RuntimeError(f"sweep: {len(table)} of {spec.n_cases} cases finished")
+            raise ToolchainError(f"sweep: {len(table)} of {spec.n_cases} cases finished: the Dask cluster lost the others")
         summary = summarise(spec, table, units)
         summary["wall_time_s"] = time.perf_counter() - t0
         summary["run_time_s"] = run_time  # from the first task submitted to the last result, cluster start excluded

@@ -60,7 +60,7 @@ def design_outer_loops(robot: Robot, bandwidth: float = DEFAULT_BANDWIDTH, dampi
 def _nonneg(value: float, name: str, unit: str) -> float:
     x = float(value)
     if not (math.isfinite(x) and x >= 0):
-        raise DesignSpecError(f"{name}: expected a finite value >= 0 {unit}, got {value!r}")
+        raise DesignSpecError(f"expected a finite value >= 0{' ' + unit if unit else ''}, got {value!r}", parameter=name)
     return x
 
 
@@ -92,7 +92,7 @@ class ModelMismatch:
         _nonneg(self.payload_mass, "payload", "kg")
         _nonneg(self.friction_scale, "friction_scale", "")
         if not (math.isfinite(self.link_mass_scale) and self.link_mass_scale > 0):
-            raise DesignSpecError(f"link_mass_scale: expected a factor > 0, got {self.link_mass_scale!r}")
+            raise DesignSpecError(f"expected a factor > 0, got {self.link_mass_scale!r}", parameter="link_mass_scale")
 
     @property
     def is_exact(self) -> bool:

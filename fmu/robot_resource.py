@@ -14,6 +14,7 @@ import json
 import zipfile
 from pathlib import Path
 from typing import Any
+from model.errors import InputError
 
 __all__ = ["ROBOT_RESOURCE", "description_to_json", "description_from_json", "read_robot_resource"]
 
@@ -66,7 +67,7 @@ def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
     try:
         doc = json.loads(text)
         if doc.get("format") != _FORMAT:
-            raise ValueError(f"format {doc.get('format')!r}, expected {_FORMAT!r}")
+            raise InputError(f"format {doc.get('format')!r}, expected {_FORMAT!r}")
         data = dict(doc["description"])
         if len(data["links"]) > MAX_JOINTS:
             raise RobotDescriptionError(f"{source}: {len(data['links'])} links: more than the joint-count limit "

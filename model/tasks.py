@@ -95,7 +95,8 @@ class Task:
         w.setflags(write=False)
         object.__setattr__(self, "waypoints", w)
         if len(self.labels) != w.shape[0]:
-            raise ValueError(f"labels: expected {w.shape[0]} labels, one per waypoint, got {len(self.labels)}")
+            raise InputError(f"expected {w.shape[0]} labels, one per waypoint, got {len(self.labels)}",
+                             parameter="labels")
 
     @property
     def n_segments(self) -> int:

@@ -12,13 +12,13 @@ import argparse
 import math
 import re
 
-from model.errors import InputError
+from model.errors import InputError, WorkbenchError
 
-__all__ = ["UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
+__all__ = ["ArgumentsError", "OneLineParser", "UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
            "in_flag_terms", "positive_float"]
 
-#: The library's parameter names that its error messages start with (``"link_mass_scale: expected ..."``)
-#: and the flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
+#: The library's parameter names (the ``parameter`` field of :class:`model.errors.WorkbenchError`) and the
+#: flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
 FLAG_OF: dict[str, str] = {
     "bandwidth": "--bandwidth",
     "damping": "--damping",
@@ -37,10 +37,26 @@ FLAG_OF: dict[str, str] = {
     "step": "--step",
     "motor_model": "--motor-model",
 }
-_LEADING_NAME = re.compile(r"^([A-Za-z_]\w*):")
+_FLAG = re.compile(r"--([\w-]+)")
+
 
 class UsageError(InputError):
     """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
+
+
+class ArgumentsError(UsageError):
+    """argparse refused the command line (an unknown flag, a value of the wrong type); ``prog`` is the command."""
+
+    def __init__(self, message: str, prog: str) -> None:
+        super().__init__(message)
+        self.prog = prog
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` whose refusal is an :class:`ArgumentsError` (one line), not usage + exit."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise ArgumentsError(message, self.prog)
 
 
 def controller_kind(value: str) -> str:
@@ -53,20 +69,18 @@ def controller_kind(value: str) -> str:
     return value
 
 
-def in_flag_terms(message: str, args: argparse.Namespace) -> str:
-    """``message`` with a leading library parameter name (:data:`FLAG_OF`) replaced by the flag of the command.
+def in_flag_terms(exc: WorkbenchError, args: argparse.Namespace) -> str:
+    """The message of ``exc`` with the parameter it concerns named by the flag of the running command.
 
-    Only a flag that the running command has is put in (``args`` holds its options), so
-    ``"t_end: ..."`` from ``manip validate-fmu`` reads ``"--horizon: ..."`` and a name no flag sets stays.
+    ``exc.parameter`` is looked up in :data:`FLAG_OF`; only a flag that the running command has is put
+    in (``args`` holds its options), so ``t_end`` from ``manip validate-fmu`` reads ``--horizon`` and a
+    parameter no flag of the command sets keeps its library name (``str(exc)``).
     """
-    match = _LEADING_NAME.match(message)
-    if match is None or match.group(1) not in FLAG_OF:
-        return message
-    flag = FLAG_OF[match.group(1)]
-    option = re.search(r"--([\w-]+)", flag)
+    flag = FLAG_OF.get(exc.parameter or "")
+    option = None if flag is None else _FLAG.search(flag)
     if option is None or not hasattr(args, option.group(1).replace("-", "_")):
-        return message
-    return flag + message[match.end(1):]
+        return str(exc)
+    return f"{flag}: {exc.detail}"
 
 
 def finite_or_fail(value: float | None, flag: str, positive: bool = True) -> None:

@@ -51,7 +51,7 @@ def run_track(args: argparse.Namespace) -> int:
     from control_design.computed_torque import ModelMismatch, plant_with_mismatch
     from control_design.design import design_robot
     from control_design.errors import DesignSpecError
-    from control_design.reference import check_trajectory_limits, task_trajectory
+    from control_design.reference import check_trajectory_limits, reference_task_name, reference_task_rule, task_trajectory
     from model.robot import load_robot
 
     kind = controller_kind(args.controller)
@@ -61,7 +61,8 @@ def run_track(args: argparse.Namespace) -> int:
         raise DesignSpecError(f"--payload: expected a mass >= 0 kg, got {args.payload!r}")
     check_out_dir(args.out)
     robot = load_robot(args.robot)
-    traj = task_trajectory(robot, args.task, args.waypoints, args.segment_time)
+    task = reference_task_name(robot) if args.task is None and args.waypoints is None else args.task
+    traj = task_trajectory(robot, task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate,
                           analyse=False)
@@ -69,12 +70,14 @@ def run_track(args: argparse.Namespace) -> int:
                              link_mass_scale=args.mass_scale)
     plant = robot if mismatch.is_exact else plant_with_mismatch(robot, mismatch)
     controller = design.controller(args.rate, saturate=not args.no_saturation)
+    if args.task is None and args.waypoints is None:  # said once the request is known to be good
+        print(f"manip track: no --task: following {task!r} ({reference_task_rule(robot)})", file=sys.stderr)
     result = simulate_tracking(plant, controller, traj, progress=ProgressLine("track", sys.stderr))
     met = result.metrics()
     out = out_dir(args.out)
     data = met.to_dict()
     data.update({
-        "task": str(args.waypoints) if args.waypoints else args.task, "duration_s": float(result.t[-1] - result.t[0]),
+        "task": str(args.waypoints) if args.waypoints else task, "duration_s": float(result.t[-1] - result.t[0]),
         "bandwidth_rad_s": args.bandwidth, "damping": design.damping, "phase_margin_deg": args.phase_margin,
         "plant": mismatch.describe(), "payload_kg": mismatch.payload_mass,
         "tau_m_max": None if result.tau_m_max is None else result.tau_m_max.tolist(), "substeps": result.substeps,
@@ -123,7 +126,8 @@ def register(subparsers: Any, full: bool = True) -> None:
         return
     add_spec_args(p)
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--task", default="pick-and-place", help="built-in task (default pick-and-place)")
+    src.add_argument("--task", default=None,
+                     help="a [[tasks]] entry of the robot file or 'tour' (default: the file's first task, else tour)")
     src.add_argument("--waypoints", default=None, metavar="FILE", help="TOML or CSV joint waypoint file")
     p.add_argument("--segment-time", type=float, default=None, metavar="S", help="duration of every segment, s (default 3)")
     p.add_argument("--payload", type=float, default=None, metavar="KG",

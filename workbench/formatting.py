@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
+from model.errors import InputError
 
 if TYPE_CHECKING:
     from closed_loop.result import TrackingMetrics
@@ -77,7 +78,8 @@ def table_cells(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> tuple[l
     """
     ncol = len(header)
     if any(len(row) != ncol for row in rows):
-        raise ValueError(f"rows: expected {ncol} cells each like the header, got {sorted({len(r) for r in rows})}")
+        raise InputError(f"expected {ncol} cells each like the header, got {sorted({len(r) for r in rows})}",
+                         parameter="rows")
     columns = [format_column([row[c] for row in rows]) for c in range(ncol)]
     numeric = [bool(rows) and all(is_number(row[c]) or _reads_as_number(row[c]) for row in rows) for c in range(ncol)]
     return [[columns[c][r] for c in range(ncol)] for r in range(len(rows))], numeric

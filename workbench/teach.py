@@ -82,7 +82,8 @@ class DisplayUnits:
 
     def __post_init__(self) -> None:
         if self.angle not in ("deg", "rad") or self.length not in ("mm", "m"):
-            raise ValueError(f"units: expected angle deg|rad and length mm|m, got {self.angle!r}, {self.length!r}")
+            raise InputError(f"expected angle deg|rad and length mm|m, got {self.angle!r}, {self.length!r}",
+                             parameter="units")
 
     def factor(self, revolute: bool) -> float:
         """Displayed value per SI unit (rad or m)."""
