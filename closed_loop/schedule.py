@@ -122,6 +122,11 @@ class Schedule:
         sub = default_substeps(plant, dt, q_start) if substeps is None else int(substeps)
         if sub < 1:
             raise DesignSpecError(f"expected >= 1, got {substeps!r}", parameter="substeps")
+        if steps * sub + 1 > MAX_SAMPLES:  # the RK4 grid is a time grid too: bounded before the run starts
+            why = "" if substeps is not None else " (as fast as the plant's viscous friction needs: default_substeps)"
+            raise DesignSpecError(f"{steps} control periods of {sub} RK4 sub-steps each{why}: {steps * sub + 1:.4g} "
+                                  f"integration instants, more than the sample limit of {MAX_SAMPLES}",
+                                  parameter="substeps")
         return cls(dt=dt, rate_hz=1.0 / dt if rate_hz is None else float(rate_hz), steps=steps, t=t,
                    q_ref=Qr, qd_ref=QDr, qdd_ref=QDDr, q0=q_start, qd0=qd_start, substeps=sub)
 

@@ -344,6 +344,16 @@ def summarise(spec: SweepSpec, table: Any, units: tuple[str, ...], bound: float 
     return out
 
 
+def _client(scheduler: str) -> Any:
+    """A Dask client of the scheduler at ``scheduler``; ToolchainError naming it when it cannot be reached."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler)
+    except (OSError, ValueError, TypeError) as exc:  # OSError: timed out or refused; ValueError: a bad address
+        raise ToolchainError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}", parameter="scheduler") from None
+
+
 def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, host: str = "127.0.0.1", resume: bool = False,
           progress: Callable[[int], None] | None = None, stream: TextIO | None = None,
@@ -373,7 +383,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
     """
     import tempfile
 
-    from distributed import Client, as_completed
+    from distributed import as_completed
 
     t0 = time.perf_counter()
     stream = stream if stream is not None else sys.stderr
@@ -404,7 +414,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
         report = progress or SweepProgress(spec.n_cases, stream, done=len(done))
         run_time = 0.0
         if todo.size:
-            with (contextlib.nullcontext(Client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
+            with (contextlib.nullcontext(_client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
                 try:
                     if scheduler:
                         n_workers = max(1, len(client.scheduler_info()["workers"]))

@@ -23,6 +23,7 @@ would run.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import shutil
@@ -773,6 +774,9 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     model end earlier where the open-loop arm diverges (:func:`divergence_horizon`).
     Nothing but the FMU is needed: the robot comes from its ``resources/robot.json``.
     """
+    if not (math.isfinite(step) and 0 < step <= t_end):
+        raise InputError(f"expected a communication step > 0 and no longer than the horizon of {t_end:g} s, got "
+                         f"{step:g} s", parameter="step")
     if t_end / step + 1 > MAX_SAMPLES:  # before any work: the runs sample every step
         raise InputError(f"{t_end:g} s at a step of {step:g} s: {t_end / step + 1:.4g} samples, more than the "
                          f"sample limit of {MAX_SAMPLES}", parameter="t_end")

@@ -11,11 +11,12 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import socket
 
 from model.errors import InputError, WorkbenchError
 
 __all__ = ["ArgumentsError", "OneLineParser", "UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
-           "in_flag_terms", "positive_float"]
+           "host_address", "in_flag_terms", "positive_float", "scheduler_address"]
 
 #: The library's parameter names (the ``parameter`` field of :class:`model.errors.WorkbenchError`) and the
 #: flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
@@ -36,6 +37,9 @@ FLAG_OF: dict[str, str] = {
     "t_end": "--horizon",
     "step": "--step",
     "motor_model": "--motor-model",
+    "samples": "--samples",
+    "seed": "--seed",
+    "scheduler": "--scheduler",
 }
 _FLAG = re.compile(r"--([\w-]+)")
 
@@ -117,6 +121,37 @@ def bounded_int(lo: int, hi: int, what: str):
         return value
 
     return parse
+
+
+def host_address(text: str) -> str:
+    """argparse type: a host name or address this machine resolves (``127.0.0.1``, ``::1``, ``localhost``)."""
+    if not text.strip() or any(c.isspace() or c == "\0" for c in text):
+        raise argparse.ArgumentTypeError(f"expected a host name or address, got {text!r}")
+    try:
+        socket.getaddrinfo(text, None)
+    except (OSError, UnicodeError, ValueError) as exc:  # socket.gaierror is an OSError
+        raise argparse.ArgumentTypeError(f"{text!r} is not a host name or address this machine resolves "
+                                         f"({getattr(exc, 'strerror', None) or exc})") from None
+    return text
+
+
+def scheduler_address(text: str) -> str:
+    """argparse type: a Dask scheduler address, ``tcp://HOST:PORT`` (the protocol defaults to tcp), host resolved."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    expected = f"expected a scheduler address tcp://HOST:PORT, got {text!r}"
+    if not text.strip() or any(c.isspace() or c == "\0" for c in text):
+        raise argparse.ArgumentTypeError(expected)
+    try:
+        scheme, location = parse_address(text)
+        if scheme in ("tcp", "tls", "ws", "wss"):
+            host, port = parse_host_port(location, 8786)
+            if not (host and 1 <= int(port) <= 65535):
+                raise ValueError(expected)
+            host_address(host)
+    except (ValueError, TypeError, argparse.ArgumentTypeError) as exc:
+        raise argparse.ArgumentTypeError(expected if isinstance(exc, (ValueError, TypeError)) else str(exc)) from None
+    return text
 
 
 def add_spec_args(p: argparse.ArgumentParser) -> None:

@@ -16,7 +16,7 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 from .args import add_no_plots, add_spec_args, controller_kind, finite_or_fail
 from .formatting import format_table, saturation_warnings
@@ -42,6 +42,19 @@ def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "",
     figures = (("tracking_error", tracking_error_plot(result)), ("torques", torque_plot(result, limit_sources=sources)),
                ("joints", joint_plot(result)))
     return [save_figure(fig, out / f"{prefix}{name}.png") for name, fig in figures]
+
+
+def _noted(progress: Callable[[float, float, float], None], note: str) -> Callable[[float, float, float], None]:
+    """``progress`` that first prints ``note`` on stderr, at its first call (when the simulation starts)."""
+    said = []
+
+    def report(fraction: float, t: float, t_final: float) -> None:
+        if not said:
+            print(note, file=sys.stderr, flush=True)
+            said.append(True)
+        progress(fraction, t, t_final)
+
+    return report
 
 
 def run_track(args: argparse.Namespace) -> int:
@@ -70,9 +83,10 @@ def run_track(args: argparse.Namespace) -> int:
                              link_mass_scale=args.mass_scale)
     plant = robot if mismatch.is_exact else plant_with_mismatch(robot, mismatch)
     controller = design.controller(args.rate, saturate=not args.no_saturation)
-    if args.task is None and args.waypoints is None:  # said once the request is known to be good
-        print(f"manip track: no --task: following {task!r} ({reference_task_rule(robot)})", file=sys.stderr)
-    result = simulate_tracking(plant, controller, traj, progress=ProgressLine("track", sys.stderr))
+    progress = ProgressLine("track", sys.stderr)
+    if args.task is None and args.waypoints is None:  # said when the run starts: a refused request stays one line
+        progress = _noted(progress, f"manip track: no --task: following {task!r} ({reference_task_rule(robot)})")
+    result = simulate_tracking(plant, controller, traj, progress=progress)
     met = result.metrics()
     out = out_dir(args.out)
     data = met.to_dict()

@@ -48,6 +48,11 @@ VALID: set[tuple[str, str, str]] = {
     ("track", "--payload", "0"),           # no payload: the exact plant
     ("track", "--friction-scale", "0"),    # a frictionless plant
     ("workspace", "--seed", "0"),
+    ("export-fmu", "--step", "1e308"),     # an internal step longer than any communication step: one RK4 step each
+}
+#: Flags of the base command line that a flag under test cannot be combined with (dropped for its cases).
+CONFLICTS: dict[tuple[str, str], tuple[str, ...]] = {
+    ("sweep", "--scheduler"): ("--workers",),  # the scheduler's cluster has its own workers
 }
 
 
@@ -76,12 +81,12 @@ def _subparsers(parser=None) -> dict:
 
 
 def _kind(command: str, action) -> tuple[str, ...]:
+    if action.dest in TEXT_KINDS:  # text, whatever its argparse type checks (a host, an address)
+        return TEXT_KINDS[action.dest]
     if action.choices is not None:
         return CHOICE
-    if action.type is not None:
-        return NUMBER
-    assert action.dest in TEXT_KINDS, f"manip {command}: argument {action.dest!r} has no hostile values: add its kind"
-    return TEXT_KINDS[action.dest]
+    assert action.type is not None, f"manip {command}: argument {action.dest!r} has no hostile values: add its kind"
+    return NUMBER
 
 
 def _cases() -> list[tuple[str, str | None, str, str]]:
@@ -110,7 +115,7 @@ def _argv(base: list[str], command: str, flag: str | None, dest: str, value: str
         return argv
     action = next(a for a in parser._actions if flag in a.option_strings)
     # drop the base's setting of this flag (and of a flag exclusive with it)
-    exclusive = {flag}
+    exclusive = {flag, *CONFLICTS.get((command, flag), ())}
     for group in parser._mutually_exclusive_groups:
         if action in group._group_actions:
             exclusive |= {s for a in group._group_actions for s in a.option_strings}
