@@ -264,6 +264,7 @@ class TeachPage:
         self.server = server
         self.units = units
         self.limits = finite_limits(robot.description)
+        # the rest (within qlim); the clip binds only for a joint without limits resting beyond its slider's +-pi
         self.q = np.clip(robot.q_rest, self.limits[0], self.limits[1]).astype(float)
         self._lock = threading.RLock()
         self._pending_lock = threading.Lock()
