@@ -37,10 +37,10 @@ from model.dynamics.core import source_fingerprint
 from model.dynamics.parameters import DynamicsParameters
 from model.dynamics.symbolic import accel_scaled_function
 from model.robot import Robot
+from model.errors import NumericalError, ToolchainError
 
 from .result import SATURATION_MARGIN, TrackingResult
 from .schedule import Schedule
-from model.errors import NumericalError, ToolchainError
 
 __all__ = ["KERNEL_SOURCE", "ClosedLoopKernel", "KernelRun", "closed_loop_kernel"]
 

@@ -41,9 +41,9 @@ from typing import Any, Callable, Iterator, TextIO
 import numpy as np
 
 from model.files import atomic_path, write_atomic
+from model.errors import ToolchainError
 
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
-from model.errors import ToolchainError
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
            "nominal_run", "rerun_case", "run_cases", "summarise", "sweep"]
@@ -390,16 +390,16 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
     setup = case_setup(spec)  # builds (or loads) the kernel here, once, before any worker needs it
     robot = setup.robot
     check_joints(spec, robot.n)
-    if spec.task is None and spec.waypoints is None:
-        from control_design.reference import reference_task_name, reference_task_rule
-
-        print(f"sweep: no task in the spec: following {reference_task_name(robot)!r} ({reference_task_rule(robot)})",
-              file=stream, flush=True)
     joints = tuple(lk.name or f"joint{i + 1}" for i, lk in enumerate(robot.description.links))
     units = tuple("rad" if lk.is_revolute else "m" for lk in robot.description.links)
     # a case that cannot be set up (e.g. a rate too slow for a bandwidth) fails here, before the cluster starts
     for corner in _corners(spec):
         _case_inputs(spec, setup, corner)
+    if spec.task is None and spec.waypoints is None:  # said once the spec is known to be good
+        from control_design.reference import reference_task_name, reference_task_rule
+
+        print(f"sweep: no task in the spec: following {reference_task_name(robot)!r} ({reference_task_rule(robot)})",
+              file=stream, flush=True)
     tmp = None
     if out is None:
         tmp = tempfile.TemporaryDirectory(prefix="manip-sweep-")

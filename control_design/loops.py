@@ -33,8 +33,9 @@ import control
 import numpy as np
 import scipy.linalg
 
-from .errors import DesignSpecError, SamplingRateError
 from model.errors import InputError
+
+from .errors import DesignSpecError, SamplingRateError
 
 __all__ = [
     "MIN_RATE_PER_BANDWIDTH_HZ",

@@ -21,9 +21,9 @@ from model.robot import Robot
 from model import tasks as _tasks
 from model.tasks import find_task, load_waypoints
 from model.trajectory import SampleLimitError, Trajectory
+from model.errors import InputError
 
 from .errors import TrajectoryLimitError
-from model.errors import InputError
 
 __all__ = [
     "Reference",

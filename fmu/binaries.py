@@ -17,8 +17,9 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .platforms import PLATFORMS, Platform, platform_folder
 from model.errors import ToolchainError
+
+from .platforms import PLATFORMS, Platform, platform_folder
 
 __all__ = ["BinaryCheck", "carried_platforms", "check_binary", "objdump"]
 

@@ -18,8 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from .friction_modes import A_EPS, F_EPS, V_EPS
 from model.errors import NumericalError
+
+from .friction_modes import A_EPS, F_EPS, V_EPS
 
 __all__ = ["StickSlipResult", "coulomb_limits", "mode_dynamics", "indicators", "update_modes", "settle_modes",
            "start_modes", "simulate_stick_slip"]

@@ -22,8 +22,9 @@ from typing import Sequence
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
-from .archive import check_fmu_archive, model_description_xml
 from model.errors import InputError
+
+from .archive import check_fmu_archive, model_description_xml
 
 __all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names", "fmi_version"]
 

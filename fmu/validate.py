@@ -37,8 +37,9 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .archive import check_fmu_archive, model_description_xml
 from model.errors import InputError, NumericalError
+
+from .archive import check_fmu_archive, model_description_xml
 from model.limits import MAX_SAMPLES
 
 __all__ = [

@@ -470,18 +470,14 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
             if not isinstance(data["name"], str):
                 raise w.fail(i, "name", data["name"], "a string")
             kw["name"] = data["name"]
-    if "torque_limit" in data:
-        with w.collect():
-            limit = _number(w, i, "torque_limit", data["torque_limit"])
-            if limit <= 0:
-                raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
-            kw["torque_limit"] = limit
-    if "velocity_limit" in data:
-        with w.collect():
-            limit = _number(w, i, "velocity_limit", data["velocity_limit"])
-            if limit <= 0:
-                raise w.fail(i, "velocity_limit", data["velocity_limit"], "a joint speed limit > 0 (rad/s or m/s)")
-            kw["velocity_limit"] = limit
+    for key, expected in (("torque_limit", "a motor torque rating > 0 (N m)"),
+                          ("velocity_limit", "a joint speed limit > 0 (rad/s or m/s)")):
+        if key in data:
+            with w.collect():
+                limit = _number(w, i, key, data[key])
+                if limit <= 0:
+                    raise w.fail(i, key, data[key], expected)
+                kw[key] = limit
     kw["friction_source"] = tuple(FROM_FILE if key in data else FROM_DEFAULT
                                   for key in ("viscous_friction", "coulomb_friction"))
     if "flip" in data:

@@ -51,7 +51,7 @@ class UsageError(InputError):
 class ArgumentsError(UsageError):
     """argparse refused the command line (an unknown flag, a value of the wrong type); ``prog`` is the command."""
 
-    def __init__(self, message: str, prog: str) -> None:
+    def __init__(self, message: str, prog: str = "manip") -> None:
         super().__init__(message)
         self.prog = prog
 
@@ -144,13 +144,13 @@ def scheduler_address(text: str) -> str:
         raise argparse.ArgumentTypeError(expected)
     try:
         scheme, location = parse_address(text)
-        if scheme in ("tcp", "tls", "ws", "wss"):
-            host, port = parse_host_port(location, 8786)
-            if not (host and 1 <= int(port) <= 65535):
-                raise ValueError(expected)
-            host_address(host)
-    except (ValueError, TypeError, argparse.ArgumentTypeError) as exc:
-        raise argparse.ArgumentTypeError(expected if isinstance(exc, (ValueError, TypeError)) else str(exc)) from None
+        host, port = parse_host_port(location, 8786) if scheme in ("tcp", "tls", "ws", "wss") else ("-", 1)
+    except (ValueError, TypeError):
+        raise argparse.ArgumentTypeError(expected) from None
+    if not (host and 1 <= int(port) <= 65535):
+        raise argparse.ArgumentTypeError(expected)
+    if host != "-":
+        host_address(host)  # its own message: the host does not resolve
     return text
 
 

@@ -187,7 +187,6 @@ class _SetEvent:
         pass
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize(("command", "flag", "dest", "value"), CASES,
                          ids=[f"{c} {f or d}={v!r}" for c, f, d, v in CASES])
 def test_a_hostile_value_is_refused_in_one_line(command, flag, dest, value, tmp_path, fmu_file, spec_file,
