@@ -59,6 +59,7 @@ from control_design.reference import Reference
 from fmu.build import build_fmu
 from fmu.variables import DiscreteStates, ModelSpec, Quantity
 from model.robot import Robot
+from model.errors import InputError
 
 __all__ = [
     "CONTROLLER_FMU_KINDS",
@@ -133,7 +134,7 @@ def _vector_parameter(name: str, kind: str, robot: Robot) -> tuple[list[str], st
         return ["kg.m2"] * n, "fed-forward decoupled inertia, motor side", 0.0
     if name == "B_ff_m":
         return ["N.m.s/rad"] * n, "fed-forward viscous friction, motor side", 0.0
-    raise ValueError(f"controller: the law parameter {name!r} has no FMU variable")
+    raise InputError(f"the law parameter {name!r} has no FMU variable", parameter="controller")
 
 
 def controller_spec(controller: Controller, robot: Robot, *, model_identifier: str | None = None) -> ModelSpec:
@@ -155,19 +156,20 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         A kind not in :data:`CONTROLLER_FMU_KINDS`, or a joint
         count that differs from the robot's.
     """
     kind = controller.kind
     if kind not in CONTROLLER_FMU_KINDS:
-        raise ValueError(f"controller: expected a kind in {CONTROLLER_FMU_KINDS} (stateless laws), got {kind!r}")
+        raise InputError(f"expected a kind in {CONTROLLER_FMU_KINDS} (stateless laws), got {kind!r}",
+                         parameter="controller")
     if not isinstance(controller, LawController):
-        raise ValueError(f"controller: expected a DecentralisedController or ComputedTorqueController, "
-                         f"got {type(controller).__name__}")
+        raise InputError(f"expected a DecentralisedController or ComputedTorqueController, "
+                         f"got {type(controller).__name__}", parameter="controller")
     n = robot.n
     if controller.n != n:
-        raise ValueError(f"controller: expected {n} joints like robot {robot.name!r}, got {controller.n}")
+        raise InputError(f"expected {n} joints like robot {robot.name!r}, got {controller.n}", parameter="controller")
     pos, vel, acc = _units(robot)
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
     idx = range(n)
@@ -291,7 +293,7 @@ def export_controller_fmu(design: RobotDesign | Controller, path: str | os.PathL
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Missing robot, joint counts that differ.
     fmu.build.FmuBuildError
         The generated C did not compile.
@@ -302,9 +304,10 @@ def export_controller_fmu(design: RobotDesign | Controller, path: str | os.PathL
     elif isinstance(design, Controller):
         controller = design
         if robot is None:
-            raise ValueError("robot: expected the Robot the controller drives when exporting a ready Controller")
+            raise InputError("expected the Robot the controller drives when exporting a ready Controller",
+                             parameter="robot")
     else:
-        raise ValueError(f"design: expected a RobotDesign or a Controller, got {type(design).__name__}")
+        raise InputError(f"expected a RobotDesign or a Controller, got {type(design).__name__}", parameter="design")
     return build_fmu(controller_spec(controller, robot), path, progress=progress)
 
 
@@ -313,17 +316,18 @@ def controller_fmu_kind(path: str | os.PathLike[str]) -> tuple[str, str]:
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         The file is not a controller FMU of this workbench.
     """
     try:
         with zipfile.ZipFile(path) as zf:
             root = ET.fromstring(zf.read("modelDescription.xml"))
     except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
-        raise ValueError(f"path: expected a controller FMU, could not read {str(path)!r}: {exc}") from exc
+        raise InputError(f"expected a controller FMU, could not read {str(path)!r}: {exc}", parameter="path") from exc
     match = _NAME_PATTERN.match(root.get("modelName", ""))
     if match is None:
-        raise ValueError(f"path: {str(path)!r} is not a controller FMU (modelName {root.get('modelName')!r})")
+        raise InputError(f"{str(path)!r} is not a controller FMU (modelName {root.get('modelName')!r})",
+                         parameter="path")
     return match["robot"], match["kind"]
 
 

@@ -44,6 +44,7 @@ from model.dynamics.singular import singular_dynamics_error
 from model.errors import NumericalError
 from model.plant import STEP_FUNCTIONS, build_plant
 from model.robot import Robot
+from model.errors import NumericalError, ToolchainError
 
 from .result import SATURATION_MARGIN, TrackingResult
 from .schedule import Schedule
@@ -160,19 +161,21 @@ class ClosedLoopKernel:
         """
         n = self.robot.n
         if getattr(controller, "kind", None) != self.kind or controller.n != n:
-            raise DesignSpecError(f"controller: expected a {self.kind!r} controller of {n} joints, "
-                                  f"got {getattr(controller, 'kind', type(controller).__name__)!r}")
+            raise DesignSpecError(f"expected a {self.kind!r} controller of {n} joints, "
+                                  f"got {getattr(controller, 'kind', type(controller).__name__)!r}",
+                                  parameter="controller")
         if abs(controller.dt - schedule.dt) > 1e-15 * schedule.dt:
-            raise DesignSpecError(f"controller: its period {controller.dt:g} s is not the schedule's {schedule.dt:g} s")
+            raise DesignSpecError(f"its period {controller.dt:g} s is not the schedule's {schedule.dt:g} s",
+                                  parameter="controller")
         if not (np.isfinite(link_mass_scale) and link_mass_scale > 0):
-            raise DesignSpecError(f"link_mass_scale: expected a factor > 0, got {link_mass_scale!r}")
+            raise DesignSpecError(f"expected a factor > 0, got {link_mass_scale!r}", parameter="link_mass_scale")
         p = np.append(self.robot.dynamics.check_parameters(plant_parameters).vector, float(link_mass_scale))
         own = controller.parameter_values()
         if values:
             unknown = [k for k in values if k not in own]
             if unknown:
-                raise DesignSpecError(f"values: {unknown[0]!r} is not a parameter of the {self.kind!r} law "
-                                      f"(expected one of {', '.join(own)})")
+                raise DesignSpecError(f"{unknown[0]!r} is not a parameter of the {self.kind!r} law "
+                                      f"(expected one of {', '.join(own)})", parameter="values")
             own.update({k: np.broadcast_to(np.asarray(v, dtype=np.float64), own[k].shape) for k, v in values.items()})
         values = own
         inputs: list[np.ndarray | None] = []
@@ -209,7 +212,8 @@ class ClosedLoopKernel:
             raise NumericalError(f"closed-loop kernel {self.kind!r}: the plant's fixed-step rule failed: "
                                  f"{PLANT_STATUS.get(status + 10, status + 10)} in the period from t = {t_fail:g} s")
         if status < 0:
-            raise RuntimeError(f"closed-loop kernel {self.kind!r}: failed with status {status}")
+            raise (NumericalError if status == -4 else ToolchainError)(  # -4: an evaluation of the generated code failed
+                f"closed-loop kernel {self.kind!r}: failed with status {status}")
         k = int(last.value)
         result = None
         if record and status == 0:

@@ -77,16 +77,17 @@ def _plant_robot(plant_fmu: Path, plant: Robot | None) -> Robot:
     try:
         robot = reload_fmu_robot(plant_fmu)
     except RobotNotReloadableError as exc:
-        raise ValueError(f"plant: {plant_fmu.name}: {exc}; pass the plant Robot as plant=") from exc
+        raise InputError(f"{plant_fmu.name}: {exc}; pass the plant Robot as plant=", parameter="plant") from exc
     if robot is None:
-        raise ValueError(f"plant: {plant_fmu.name} records no robot in its VendorAnnotations; pass the plant Robot")
+        raise InputError(f"{plant_fmu.name} records no robot in its VendorAnnotations; pass the plant Robot",
+                         parameter="plant")
     return robot
 
 
 def _existing(path: str | os.PathLike[str], what: str) -> Path:
     p = Path(path)
     if not p.is_file():
-        raise ValueError(f"{what}: expected an FMU file, got {str(p)!r}")
+        raise InputError(f"expected an FMU file, got {str(p)!r}", parameter=what)
     return p
 
 
@@ -104,7 +105,7 @@ class _Instance:
         check_fmu_archive(path)  # a stranger's FMU: refused before anything is extracted
         self.md = read_model_description(str(path))
         if self.md.coSimulation is None:
-            raise InputError(f"{name}: {path.name} has no Co-Simulation interface")
+            raise InputError(f"{path.name} has no Co-Simulation interface", parameter=name)
         unzip = extract(str(path), unzipdir=os.path.join(workdir, name))
         self.vr = {v.name: int(v.valueReference) for v in self.md.modelVariables}
         self.name = name
@@ -118,7 +119,7 @@ class _Instance:
 
         missing = [nm for nm in names if nm not in self.vr]
         if missing:
-            raise ValueError(f"{self.name}: no variables {missing} in {self.path.name}")
+            raise InputError(f"no variables {missing} in {self.path.name}", parameter=self.name)
         return (fmi2ValueReference * len(names))(*[self.vr[nm] for nm in names])
 
     def start(self, t0: float, values: Mapping[str, float]) -> None:
@@ -205,7 +206,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Missing FMU, unknown variable, joint counts that differ, bad times.
     control_design.errors.SimulationDivergedError
         The plant FMU discarded a step (its state became non-finite).
@@ -221,10 +222,12 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
     if isinstance(controller, Controller):
         py_ctrl = controller
         if py_ctrl.n != n:
-            raise ValueError(f"controller: expected {n} joints like plant {plant_robot.name!r}, got {py_ctrl.n}")
+            raise InputError(f"expected {n} joints like plant {plant_robot.name!r}, got {py_ctrl.n}",
+                             parameter="controller")
         dt = py_ctrl.dt if rate_hz is None else 1.0 / rate_hz
         if rate_hz is not None and not math.isclose(dt, py_ctrl.dt, rel_tol=1e-12):
-            raise ValueError(f"rate_hz: the Python controller runs at {py_ctrl.rate_hz:g} Hz, got {rate_hz!r}")
+            raise InputError(f"the Python controller runs at {py_ctrl.rate_hz:g} Hz, got {rate_hz!r}",
+                             parameter="rate_hz")
         kind = py_ctrl.kind
     else:
         ctrl_path = _existing(controller, "controller")
@@ -242,7 +245,8 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                 step = ctrl_inst.md.defaultExperiment.stepSize if ctrl_inst.md.defaultExperiment else None
                 dt = 1.0 / rate_hz if rate_hz is not None else float(step) if step else 0.0
                 if not dt > 0:
-                    raise ValueError("rate_hz: expected a control rate (the controller FMU has no default step)")
+                    raise InputError("expected a control rate (the controller FMU has no default step)",
+                                     parameter="rate_hz")
             rate = rate_hz if rate_hz is not None else py_ctrl.rate_hz if py_ctrl is not None else None
             sched = Schedule.build(plant_robot, trajectory, dt, rate_hz=rate, t_final=t_final, q0=q0, qd0=qd0,
                                    substeps=substeps)
@@ -383,7 +387,8 @@ def run_closed_loop_me(plant_fmu: str | os.PathLike[str], controller: Controller
     plant_robot = _plant_robot(plant_path, plant)
     n = plant_robot.n
     if controller.n != n:
-        raise ValueError(f"controller: expected {n} joints like plant {plant_robot.name!r}, got {controller.n}")
+        raise InputError(f"expected {n} joints like plant {plant_robot.name!r}, got {controller.n}",
+                         parameter="controller")
     sched = Schedule.build(plant_robot, trajectory, controller.dt, rate_hz=controller.rate_hz, t_final=t_final,
                            q0=q0, qd0=qd0, substeps=1)
     check_fmu_archive(plant_path)
@@ -481,7 +486,7 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Missing FMU, unknown variable, a period that is not a whole number of ns.
     fmu.cosim.CosimError
         libcosim refused to load, connect or step.
@@ -502,13 +507,14 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
 
         de = read_model_description(str(ctrl_path)).defaultExperiment
         if de is None or not de.stepSize:
-            raise ValueError("rate_hz: expected a control rate (the controller FMU has no default step)")
+            raise InputError("expected a control rate (the controller FMU has no default step)", parameter="rate_hz")
         dt = float(de.stepSize)
     else:
         dt = 1.0 / rate_hz
     step_ns = int(round(dt * _NS_PER_S))
     if step_ns < 1 or abs(step_ns - dt * _NS_PER_S) > 1e-6 * max(1.0, dt * _NS_PER_S):
-        raise ValueError(f"rate_hz: libcosim counts time in ns; the period {dt!r} s is not a whole number of ns")
+        raise InputError(f"libcosim counts time in ns; the period {dt!r} s is not a whole number of ns",
+                         parameter="rate_hz")
     sched = Schedule.build(plant_robot, trajectory, dt, rate_hz=rate_hz, t_final=t_final, q0=q0, qd0=qd0,
                            substeps=substeps)
     if quiet:
@@ -530,7 +536,7 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
         def vrs(slave: str, names: Sequence[str]) -> list[int]:
             missing = [nm for nm in names if nm not in refs[slave]]
             if missing:
-                raise ValueError(f"{slave}: no variables {missing} in {files[slave]}")
+                raise InputError(f"no variables {missing} in {files[slave]}", parameter=slave)
             return [refs[slave][nm] for nm in names]
 
         x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]

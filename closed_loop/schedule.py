@@ -105,18 +105,19 @@ class Schedule:
         """
         n = plant.n
         if trajectory.n != n:
-            raise DesignSpecError(f"trajectory: expected {n} joints like plant {plant.name!r}, got {trajectory.n}")
+            raise DesignSpecError(f"expected {n} joints like plant {plant.name!r}, got {trajectory.n}",
+                                  parameter="trajectory")
         path = trajectory.path
         t0 = path.t_start
         t_end = path.t_end if t_final is None else float(t_final)
         periods = (t_end - t0) / dt
         if periods + 1 > MAX_SAMPLES:
-            raise DesignSpecError(f"t_final: {t_end - t0:g} s at {1.0 / dt:g} Hz: {periods + 1:.4g} control instants, "
-                                  f"more than the sample limit of {MAX_SAMPLES}")
+            raise DesignSpecError(f"{t_end - t0:g} s at {1.0 / dt:g} Hz: {periods + 1:.4g} control instants, "
+                                  f"more than the sample limit of {MAX_SAMPLES}", parameter="t_final")
         steps = int(round(periods))
         if steps < 1:
-            raise DesignSpecError(f"t_final: expected at least one control period ({dt:g} s) after t0 = {t0:g} s, "
-                                  f"got {t_end!r}")
+            raise DesignSpecError(f"expected at least one control period ({dt:g} s) after t0 = {t0:g} s, "
+                                  f"got {t_end!r}", parameter="t_final")
         t = t0 + np.arange(steps + 1) * dt
         Qr, QDr, QDDr = (np.asarray(a) for a in path.batch(t))
         try:
@@ -126,7 +127,12 @@ class Schedule:
             raise DesignSpecError(str(exc)) from None
         sub = default_substeps(plant, dt, q_start) if substeps is None else int(substeps)
         if sub < 1:
-            raise DesignSpecError(f"substeps: expected >= 1, got {substeps!r}")
+            raise DesignSpecError(f"expected >= 1, got {substeps!r}", parameter="substeps")
+        if steps * sub + 1 > MAX_SAMPLES:  # the RK4 grid is a time grid too: bounded before the run starts
+            why = "" if substeps is not None else " (as fast as the plant's viscous friction needs: default_substeps)"
+            raise DesignSpecError(f"{steps} control periods of {sub} RK4 sub-steps each{why}: {steps * sub + 1:.4g} "
+                                  f"integration instants, more than the sample limit of {MAX_SAMPLES}",
+                                  parameter="substeps")
         return cls(dt=dt, rate_hz=1.0 / dt if rate_hz is None else float(rate_hz), steps=steps, t=t,
                    q_ref=Qr, qd_ref=QDr, qdd_ref=QDDr, q0=q_start, qd0=qd_start, substeps=sub)
 

@@ -41,6 +41,7 @@ from typing import Any, Callable, Iterator, TextIO
 import numpy as np
 
 from model.files import atomic_path, write_atomic
+from model.errors import ToolchainError
 
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
 
@@ -380,6 +381,16 @@ def summarise(spec: SweepSpec, table: Any, units: tuple[str, ...], bound: float 
     return out
 
 
+def _client(scheduler: str) -> Any:
+    """A Dask client of the scheduler at ``scheduler``; ToolchainError naming it when it cannot be reached."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler)
+    except (OSError, ValueError, TypeError) as exc:  # OSError: timed out or refused; ValueError: a bad address
+        raise ToolchainError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}", parameter="scheduler") from None
+
+
 def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, host: str = "127.0.0.1", resume: bool = False,
           progress: Callable[[int], None] | None = None, stream: TextIO | None = None,
@@ -409,7 +420,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
     """
     import tempfile
 
-    from distributed import Client, as_completed
+    from distributed import as_completed
 
     t0 = time.perf_counter()
     stream = stream if stream is not None else sys.stderr
@@ -421,6 +432,11 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
     # a case that cannot be set up (e.g. a rate too slow for a bandwidth) fails here, before the cluster starts
     for corner in _corners(spec):
         _case_inputs(spec, setup, corner)
+    if spec.task is None and spec.waypoints is None:  # said once the spec is known to be good
+        from control_design.reference import reference_task_name, reference_task_rule
+
+        print(f"sweep: no task in the spec: following {reference_task_name(robot)!r} ({reference_task_rule(robot)})",
+              file=stream, flush=True)
     tmp = None
     if out is None:
         tmp = tempfile.TemporaryDirectory(prefix="manip-sweep-")
@@ -435,7 +451,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
         report = progress or SweepProgress(spec.n_cases, stream, done=len(done))
         run_time = 0.0
         if todo.size:
-            with (contextlib.nullcontext(Client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
+            with (contextlib.nullcontext(_client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
                 try:
                     if scheduler:
                         n_workers = max(1, len(client.scheduler_info()["workers"]))
@@ -461,7 +477,7 @@ def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None
                         client.close()
         table = assemble(spec, joints, done)
         if len(table) != spec.n_cases:  # pragma: no cover - every task either returned or raised
-            raise RuntimeError(f"sweep: {len(table)} of {spec.n_cases} cases finished")
+            raise ToolchainError(f"sweep: {len(table)} of {spec.n_cases} cases finished: the Dask cluster lost the others")
         summary = summarise(spec, table, units)
         summary["wall_time_s"] = time.perf_counter() - t0
         summary["run_time_s"] = run_time  # from the first task submitted to the last result, cluster start excluded

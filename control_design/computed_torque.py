@@ -60,7 +60,7 @@ def design_outer_loops(robot: Robot, bandwidth: float = DEFAULT_BANDWIDTH, dampi
 def _nonneg(value: float, name: str, unit: str) -> float:
     x = float(value)
     if not (math.isfinite(x) and x >= 0):
-        raise DesignSpecError(f"{name}: expected a finite value >= 0 {unit}, got {value!r}")
+        raise DesignSpecError(f"expected a finite value >= 0{' ' + unit if unit else ''}, got {value!r}", parameter=name)
     return x
 
 
@@ -92,7 +92,7 @@ class ModelMismatch:
         _nonneg(self.payload_mass, "payload", "kg")
         _nonneg(self.friction_scale, "friction_scale", "")
         if not (math.isfinite(self.link_mass_scale) and self.link_mass_scale > 0):
-            raise DesignSpecError(f"link_mass_scale: expected a factor > 0, got {self.link_mass_scale!r}")
+            raise DesignSpecError(f"expected a factor > 0, got {self.link_mass_scale!r}", parameter="link_mass_scale")
 
     @property
     def is_exact(self) -> bool:
@@ -120,6 +120,31 @@ def _scaled_description(robot: Robot, scale: float) -> RobotDescription:
     return dataclasses.replace(desc, links=links)
 
 
+def _check_plant(plant: Robot, parameter: str, value: float, what: str) -> Robot:
+    """``plant`` if, at rest, its inertia matrix is finite and positive definite in floating point and its gravity
+    torque and viscous-friction rate are finite; else a :class:`DesignSpecError` naming the mismatch ``parameter``."""
+    import numpy as np
+
+    q = plant.q_rest
+    problem = None
+    with np.errstate(all="ignore"):  # an overflow is the finding here, not a warning
+        B, g = plant.inertia(q), plant.gravload(q)
+        G, B_m = plant.gear_ratio, plant.parameters.viscous_friction
+        if not (np.all(np.isfinite(B)) and np.all(np.isfinite(g))):
+            problem = "overflow (its inertia matrix or gravity torque is not finite)"
+        else:
+            try:
+                np.linalg.cholesky(B)
+                if not np.all(np.isfinite(np.linalg.solve(B, np.diag(G * G * B_m)))):
+                    problem = "overflow (its friction rate B^-1 G^2 B_m is not finite)"
+            except np.linalg.LinAlgError:
+                problem = "singular: its inertia matrix is not positive definite in floating point"
+    if problem is not None:
+        raise DesignSpecError(f"{value:g}{what} makes the plant's dynamics at rest (q = {q.tolist()}) {problem}",
+                              parameter=parameter)
+    return plant
+
+
 def plant_with_mismatch(robot: Robot, mismatch: ModelMismatch) -> Robot:
     """A new :class:`Robot` for the simulated plant: ``robot`` changed by ``mismatch``.
 
@@ -127,17 +152,36 @@ def plant_with_mismatch(robot: Robot, mismatch: ModelMismatch) -> Robot:
     parameters (``robot.parameters`` changed by ``with_payload``, ``with_friction``;
     without a mass scaling the plant shares ``robot``'s compiled model), the mass
     scaling a scaled description (compiled once, then cached).
+
+    Raises
+    ------
+    DesignSpecError
+        A mismatch so large that the plant's numbers overflow (``parameter`` names it): a scaled link mass or
+        friction coefficient that is not finite, or an inertia matrix, gravity torque or friction rate at the
+        rest configuration that is not (checked after each change, so the first one to overflow is named).
     """
+    import numpy as np
+
     if mismatch.link_mass_scale == 1.0:
         plant = robot
     else:
-        plant = Robot(_scaled_description(robot, mismatch.link_mass_scale), motor_model=robot.motor_model)
+        s = mismatch.link_mass_scale
+        with np.errstate(all="ignore"):
+            scaled = [x * s for lk in robot.description.links for x in (lk.mass, *lk.inertia)]
+        if not np.all(np.isfinite(scaled)):
+            raise DesignSpecError(f"{s:g} times the link masses and inertias is not finite", parameter="link_mass_scale")
+        plant = _check_plant(Robot(_scaled_description(robot, s), motor_model=robot.motor_model),
+                             "link_mass_scale", s, " times the link masses")
     params = robot.parameters  # the same layout for a scaled description
     if mismatch.payload_mass:
         params = params.with_payload(mismatch.payload_mass, mismatch.payload_com, mismatch.payload_inertia)
+        _check_plant(plant.with_parameters(params), "payload_mass", mismatch.payload_mass, " kg of payload")
     if mismatch.friction_scale != 1.0:
         s = mismatch.friction_scale
-        params = params.with_friction(*(s * params.field(f) for f in ("viscous_friction", "coulomb_friction_pos",
-                                                                       "coulomb_friction_neg")))
+        with np.errstate(all="ignore"):
+            friction = [s * params.field(f) for f in ("viscous_friction", "coulomb_friction_pos", "coulomb_friction_neg")]
+        if not all(np.all(np.isfinite(f)) for f in friction):
+            raise DesignSpecError(f"{s:g} times the friction coefficients is not finite", parameter="friction_scale")
+        params = params.with_friction(*friction)
+        _check_plant(plant.with_parameters(params), "friction_scale", s, " times the friction")
     return plant.with_parameters(params)
-

@@ -43,7 +43,7 @@ __all__ = ["Controller", "LawController", "DecentralisedController", "ComputedTo
 def _vec(value: Any, n: int, name: str) -> np.ndarray:
     arr = np.array(np.broadcast_to(np.asarray(value, dtype=float), (n,)))
     if not np.all(np.isfinite(arr)):
-        raise DesignSpecError(f"{name}: expected {n} finite values, got {arr.tolist()}")
+        raise DesignSpecError(f"expected {n} finite values, got {arr.tolist()}", parameter=name)
     return arr
 
 
@@ -66,13 +66,14 @@ class Controller(ABC):
 
     def __init__(self, n: int, rate_hz: float, gear_ratio: Any, tau_m_max: Any = None) -> None:
         if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
-            raise DesignSpecError(f"rate: expected a positive number of Hz, got {rate_hz!r}")
+            raise DesignSpecError(f"expected a positive number of Hz, got {rate_hz!r}", parameter="rate")
         self.n = int(n)
         self.rate_hz = float(rate_hz)
         self.G = _vec(gear_ratio, n, "gear_ratio")
         self.tau_m_max = None if tau_m_max is None else _vec(tau_m_max, n, "tau_m_max")
         if self.tau_m_max is not None and np.any(self.tau_m_max <= 0):
-            raise DesignSpecError(f"tau_m_max: expected positive torque limits (N m), got {self.tau_m_max.tolist()}")
+            raise DesignSpecError(f"expected positive torque limits (N m), got {self.tau_m_max.tolist()}",
+                                  parameter="tau_m_max")
 
     @property
     def dt(self) -> float:
@@ -212,7 +213,7 @@ class DecentralisedController(LawController):
         G = np.atleast_1d(np.asarray(gear_ratio, dtype=float))
         n = G.size
         if kind not in ("pd", "pd-g", "pid", "pd-ff"):
-            raise UnknownControllerError(f"kind: expected one of pd, pd-g, pid, pd-ff, got {kind!r}")
+            raise UnknownControllerError(f"expected one of pd, pd-g, pid, pd-ff, got {kind!r}", parameter="kind")
         self.Kp, self.Kd = _vec(Kp, n, "Kp"), _vec(Kd, n, "Kd")
         self.Ki = _vec(Ki, n, "Ki") if kind == "pid" else np.zeros(n)
         values: dict[str, Any] = {"Kp": self.Kp, "Kd": self.Kd}
@@ -223,11 +224,12 @@ class DecentralisedController(LawController):
             values.update(J_ff_m=self.J_ff_m, B_ff_m=self.B_ff_m)
         if kind == "pd-g":
             if gravity_model is None:
-                raise DesignSpecError("gravity_model: a 'pd-g' controller needs a robot model to compensate gravity")
+                raise DesignSpecError("a 'pd-g' controller needs a robot model to compensate gravity",
+                                      parameter="gravity_model")
             values["p_model"] = gravity_model.parameters.vector
         if kind == "pid":
             if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
-                raise DesignSpecError(f"rate: expected a positive number of Hz, got {rate_hz!r}")
+                raise DesignSpecError(f"expected a positive number of Hz, got {rate_hz!r}", parameter="rate")
             values.update(Ki=self.Ki, dt=1.0 / rate_hz)
         self.gravity_model = gravity_model
         super().__init__(control_law(kind, n, gravity_model if kind == "pd-g" else None), values, rate_hz, G,

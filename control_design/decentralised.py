@@ -85,9 +85,9 @@ def _kd_or_fail(plant: JointPlant, kd: float, damping: float, wn: float) -> floa
     if kd < 0.0:
         natural = plant.B_m / (2.0 * plant.J_m * wn)
         raise DesignSpecError(
-            f"damping: {damping:g} is below what friction alone gives joint {plant.name or '?'} at wn = {wn:.4g} rad/s "
-            f"(B_m / (2 J_m wn) = {natural:.4g}); expected a damping >= {natural:.4g} or a higher bandwidth"
-        )
+            f"{damping:g} is below what friction alone gives joint {plant.name or '?'} at wn = {wn:.4g} rad/s "
+            f"(B_m / (2 J_m wn) = {natural:.4g}); expected a damping >= {natural:.4g} or a higher bandwidth",
+        parameter="damping")
     return kd
 
 
@@ -109,15 +109,16 @@ def check_spec(kind: str, bandwidth: float, damping: float | None, phase_margin:
                rate_hz: float | None, kinds: tuple[str, ...] = DECENTRALISED_KINDS + ("ct",)) -> None:
     """Validate a design request; raise a :class:`~control_design.errors.ControlDesignError` naming the bad argument."""
     if kind not in kinds:
-        raise UnknownControllerError(f"controller: expected one of {', '.join(kinds)}, got {kind!r}")
+        raise UnknownControllerError(f"expected one of {', '.join(kinds)}, got {kind!r}", parameter="controller")
     if not (isinstance(bandwidth, (int, float)) and math.isfinite(bandwidth) and bandwidth > 0):
-        raise DesignSpecError(f"bandwidth: expected a positive number of rad/s, got {bandwidth!r}")
+        raise DesignSpecError(f"expected a positive number of rad/s, got {bandwidth!r}", parameter="bandwidth")
     if damping is not None and phase_margin is not None:
-        raise DesignSpecError(f"damping: give a damping ({damping!r}) or a phase margin ({phase_margin!r}), not both")
+        raise DesignSpecError(f"give a damping ({damping!r}) or a phase margin ({phase_margin!r}), not both",
+                              parameter="damping")
     if damping is not None and not (math.isfinite(damping) and 0.05 <= damping <= 5.0):
-        raise DesignSpecError(f"damping: expected a damping ratio in [0.05, 5], got {damping!r}")
+        raise DesignSpecError(f"expected a damping ratio in [0.05, 5], got {damping!r}", parameter="damping")
     if phase_margin is not None and not (math.isfinite(phase_margin) and 5.0 <= phase_margin < 90.0):
-        raise DesignSpecError(f"phase_margin: expected a phase margin in [5, 90) deg, got {phase_margin!r}")
+        raise DesignSpecError(f"expected a phase margin in [5, 90) deg, got {phase_margin!r}", parameter="phase_margin")
     check_rate(bandwidth, rate_hz)
 
 
@@ -173,12 +174,12 @@ def design_joint(plant: JointPlant, kind: str = "pd", bandwidth: float = DEFAULT
     try:
         f_lo, f_hi = excess(lo), excess(hi)
     except DesignSpecError as exc:
-        raise DesignSpecError(f"phase_margin: {phase_margin:g} deg cannot be met: {exc}") from exc
+        raise DesignSpecError(f"{phase_margin:g} deg cannot be met: {exc}", parameter="phase_margin") from exc
     if f_lo * f_hi > 0:
         raise DesignSpecError(
-            f"phase_margin: expected a value between {f_lo + phase_margin:.1f} and {f_hi + phase_margin:.1f} deg "
-            f"for a {kind} loop at {bandwidth:g} rad/s, got {phase_margin:g}"
-        )
+            f"expected a value between {f_lo + phase_margin:.1f} and {f_hi + phase_margin:.1f} deg "
+            f"for a {kind} loop at {bandwidth:g} rad/s, got {phase_margin:g}",
+        parameter="phase_margin")
     z = float(scipy.optimize.brentq(excess, lo, hi, xtol=1e-10))
     return _loop_for(plant, kind, bandwidth, z, dt, integral_ratio)
 

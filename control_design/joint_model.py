@@ -85,7 +85,7 @@ def sample_configurations(robot: Robot, n_samples: int = DEFAULT_SAMPLES, seed: 
     Unlimited joints are drawn in [-pi, pi] rad or [-1, 1] m.
     """
     if n_samples < 1:
-        raise DesignSpecError(f"n_samples: expected at least 1 workspace sample, got {n_samples!r}")
+        raise DesignSpecError(f"expected at least 1 workspace sample, got {n_samples!r}", parameter="n_samples")
     lim = finite_limits(robot)
     rng = np.random.default_rng(seed)
     return lim[0] + rng.random((n_samples, robot.n)) * (lim[1] - lim[0])
@@ -341,7 +341,7 @@ def decoupled_model(robot: Robot, reference: Trajectory, n_samples: int = DEFAUL
         Unknown rule.
     """
     if rule not in INERTIA_RULES:
-        raise DesignSpecError(f"rule: expected one of {', '.join(INERTIA_RULES)}, got {rule!r}")
+        raise DesignSpecError(f"expected one of {', '.join(INERTIA_RULES)}, got {rule!r}", parameter="rule")
     Q = sample_configurations(robot, n_samples, seed)
     J_all = effective_inertia_m(robot, np.vstack([Q, reference.q]))
     J_min, J_mean, J_max = J_all.min(axis=0), J_all.mean(axis=0), J_all.max(axis=0)

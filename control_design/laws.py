@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 
 from model.robot import Robot
+from model.errors import InputError
 
 __all__ = [
     "LAW_KINDS",
@@ -105,13 +106,13 @@ def control_law(kind: str, n: int, model: Robot | None = None) -> ControlLaw:
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         ``kind`` not in :data:`LAW_KINDS`; no ``model`` (or one with another joint count) for 'pd-g' or 'ct'.
     """
     if kind not in LAW_KINDS:
-        raise ValueError(f"kind: expected one of {', '.join(LAW_KINDS)}, got {kind!r}")
+        raise InputError(f"expected one of {', '.join(LAW_KINDS)}, got {kind!r}", parameter="kind")
     if kind in ("pd-g", "ct") and (model is None or model.n != n):
-        raise ValueError(f"model: a {kind!r} law needs the robot model of its {n} joints, got {model!r}")
+        raise InputError(f"a {kind!r} law needs the robot model of its {n} joints, got {model!r}", parameter="model")
     sym = {name: ca.SX.sym(name, n) for name in (*_SIGNALS, "qdd_d", "Kp", "Kd", "Ki", "gear_ratio", "tau_m_max",
                                                    "J_ff_m", "B_ff_m", "z")}
     q, qd, q_d, qd_d, qdd_d = (sym[k] for k in ("q", "qd", "q_d", "qd_d", "qdd_d"))

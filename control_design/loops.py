@@ -33,6 +33,8 @@ import control
 import numpy as np
 import scipy.linalg
 
+from model.errors import InputError
+
 from .errors import DesignSpecError, SamplingRateError
 
 __all__ = [
@@ -80,25 +82,25 @@ def check_rate(bandwidth: float, rate_hz: float | None) -> None:
     if rate_hz is None:
         return
     if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
-        raise SamplingRateError(f"rate: expected a positive number of Hz, got {rate_hz!r}")
+        raise SamplingRateError(f"expected a positive number of Hz, got {rate_hz!r}", parameter="rate")
     if rate_hz > MAX_RATE_HZ:
         raise SamplingRateError(
-            f"rate: {rate_hz:g} Hz is above the highest control rate simulated, {MAX_RATE_HZ:g} Hz "
-            "(every control sample is kept)"
-        )
+            f"{rate_hz:g} Hz is above the highest control rate simulated, {MAX_RATE_HZ:g} Hz "
+            "(every control sample is kept)",
+        parameter="rate")
     if rate_hz > MAX_RATE_PER_BANDWIDTH * bandwidth:
         raise SamplingRateError(
-            f"bandwidth: {bandwidth:g} rad/s at a control rate of {rate_hz:g} Hz needs about "
+            f"{bandwidth:g} rad/s at a control rate of {rate_hz:g} Hz needs about "
             f"{240.0 * rate_hz / bandwidth:.2g} samples to analyse the sampled loop (limit "
             f"{240.0 * MAX_RATE_PER_BANDWIDTH:.2g}): raise the bandwidth to >= {rate_hz / MAX_RATE_PER_BANDWIDTH:.3g} rad/s "
-            f"or lower the rate to <= {MAX_RATE_PER_BANDWIDTH * bandwidth:.3g} Hz"
-        )
+            f"or lower the rate to <= {MAX_RATE_PER_BANDWIDTH * bandwidth:.3g} Hz",
+        parameter="bandwidth")
     need = MIN_RATE_PER_BANDWIDTH_HZ * bandwidth / (2.0 * math.pi)
     if rate_hz < need:
         raise SamplingRateError(
-            f"rate: {rate_hz:g} Hz is too low for a bandwidth of {bandwidth:g} rad/s "
-            f"({bandwidth / (2 * math.pi):.3g} Hz): expected >= {MIN_RATE_PER_BANDWIDTH_HZ:g} x bandwidth in Hz = {need:.4g} Hz"
-        )
+            f"{rate_hz:g} Hz is too low for a bandwidth of {bandwidth:g} rad/s "
+            f"({bandwidth / (2 * math.pi):.3g} Hz): expected >= {MIN_RATE_PER_BANDWIDTH_HZ:g} x bandwidth in Hz "
+            f"= {need:.4g} Hz", parameter="rate")
 
 
 def zoh_matrices(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -135,11 +137,11 @@ class JointPlant:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.J_m) and self.J_m > 0):
-            raise DesignSpecError(f"J_m: expected a positive inertia in kg m^2, got {self.J_m!r}")
+            raise DesignSpecError(f"expected a positive inertia in kg m^2, got {self.J_m!r}", parameter="J_m")
         if not (math.isfinite(self.B_m) and self.B_m >= 0):
-            raise DesignSpecError(f"B_m: expected a friction >= 0 in N m s/rad, got {self.B_m!r}")
+            raise DesignSpecError(f"expected a friction >= 0 in N m s/rad, got {self.B_m!r}", parameter="B_m")
         if not (math.isfinite(self.G) and self.G != 0):
-            raise DesignSpecError(f"G: expected a non-zero reduction ratio, got {self.G!r}")
+            raise DesignSpecError(f"expected a non-zero reduction ratio, got {self.G!r}", parameter="G")
 
     def transfer_function(self) -> control.TransferFunction:
         """``theta_m / tau_m = 1 / (J_m s^2 + B_m s)``."""
@@ -278,7 +280,7 @@ class JointLoop:
         elif which == "closed":
             A, B, C, D = self.closed_loop_matrices(discrete)
         else:
-            raise ValueError(f"which: expected 'loop' or 'closed', got {which!r}")
+            raise InputError(f"expected 'loop' or 'closed', got {which!r}", parameter="which")
         b = B[:, input]
         c = C[output, :]
         d = D[output, input]
@@ -290,7 +292,9 @@ class JointLoop:
     def period(self) -> float:
         """The control period dt, s; ValueError for a continuous-only loop."""
         if self.dt is None:
-            raise ValueError(f"dt: this {self.kind!r} loop is continuous-time (dt=None); a discrete analysis needs a control period")
+            raise InputError(f"this {self.kind!r} loop is continuous-time (dt=None); a discrete analysis needs a "
+                             "control period",
+                             parameter="dt")
         return float(self.dt)
 
 

@@ -16,10 +16,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from model.limits import MAX_SAMPLES
 from model.robot import Robot
 from model import tasks as _tasks
 from model.tasks import find_task, load_waypoints
 from model.trajectory import SampleLimitError, Trajectory
+from model.errors import InputError
 
 from .errors import TrajectoryLimitError
 
@@ -29,6 +31,7 @@ __all__ = [
     "finite_limits",
     "reference_task",
     "reference_task_name",
+    "reference_task_rule",
     "task_trajectory",
     "check_trajectory_limits",
 ]
@@ -54,6 +57,13 @@ def reference_task_name(robot: Robot) -> str:
     """Name of :func:`reference_task` for ``robot``: its file's first task, else ``"tour"``."""
     tasks = robot.description.tasks
     return tasks[0]["name"] if tasks else _tasks.TOUR
+
+
+def reference_task_rule(robot: Robot) -> str:
+    """Why :func:`reference_task_name` chose its task, for a note to the user (the rule, in words)."""
+    if robot.description.tasks:
+        return "the first [[tasks]] entry of the robot file"
+    return "the robot file has no [[tasks]]: the generic tour of every joint's range"
 
 
 def reference_task(robot: Robot, segment_time: float = DEFAULT_SEGMENT_TIME, dt: float = 0.01) -> Trajectory:
@@ -86,7 +96,7 @@ def task_trajectory(robot: Robot, task: str | None = None, waypoints: str | Path
     model.tasks.WaypointError, FileNotFoundError, ValueError
     """
     if segment_time is not None and not (math.isfinite(segment_time) and segment_time > 0):
-        raise ValueError(f"segment_time: expected a duration > 0 s, got {segment_time!r}")
+        raise InputError(f"expected a duration > 0 s, got {segment_time!r}", parameter="segment_time")
     if waypoints is not None:
         chosen = load_waypoints(waypoints, robot.description, segment_time)
         T = chosen.segment_time
@@ -94,10 +104,17 @@ def task_trajectory(robot: Robot, task: str | None = None, waypoints: str | Path
         chosen = find_task(robot.description, reference_task_name(robot) if task is None else task)
         T = chosen.segment_time if segment_time is None else segment_time
     try:
+        samples = chosen.n_segments * T / dt + 1  # checked first: an overflowing duration is no traceback
+        if not samples <= MAX_SAMPLES:
+            raise SampleLimitError(f"sampled every {dt:g} s: {samples:.4g} samples, more than the sample limit of "
+                                   f"{MAX_SAMPLES}")
         return chosen.trajectory(dt=_grid_step(T, dt), segment_time=T)
     except SampleLimitError as exc:
-        source = "segment_time" if segment_time is not None else f"task {chosen.name!r}: segment_time"
-        raise SampleLimitError(f"{source}: {T:g} s per segment, {chosen.n_segments} segments: {exc}") from None
+        if segment_time is not None:
+            raise SampleLimitError(f"{T:g} s per segment, {chosen.n_segments} segments: {exc}",
+                                   parameter="segment_time") from None
+        raise SampleLimitError(f"task {chosen.name!r}: segment_time: {T:g} s per segment, {chosen.n_segments} segments: "
+                               f"{exc}") from None
 
 
 def _grid_step(T: float, dt: float) -> float:
@@ -111,13 +128,14 @@ def check_trajectory_limits(robot: Robot, traj: Trajectory, tol: float = 1e-9) -
     ``tol`` (rad or m) absorbs rounding at a waypoint that sits exactly on a limit.
     """
     if traj.n != robot.n:
-        raise TrajectoryLimitError(f"trajectory: expected {robot.n} joints for robot {robot.name!r}, got {traj.n}")
+        raise TrajectoryLimitError(f"expected {robot.n} joints for robot {robot.name!r}, got {traj.n}",
+                                   parameter="trajectory")
     lo, hi = robot.qlim
     bad = np.argwhere((traj.q < lo - tol) | (traj.q > hi + tol))
     if bad.size:
         k, j = bad[0]
         unit = "rad" if robot.description.links[j].is_revolute else "m"
         raise TrajectoryLimitError(
-            f"trajectory: joint {j + 1} reaches {traj.q[k, j]:g} {unit} at t = {traj.t[k]:g} s, "
-            f"outside qlim [{lo[j]:g}, {hi[j]:g}]"
-        )
+            f"joint {j + 1} reaches {traj.q[k, j]:g} {unit} at t = {traj.t[k]:g} s, "
+            f"outside qlim [{lo[j]:g}, {hi[j]:g}]",
+        parameter="trajectory")

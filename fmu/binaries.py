@@ -17,6 +17,8 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from model.errors import ToolchainError
+
 from .platforms import PLATFORMS, Platform, platform_folder
 
 __all__ = ["BinaryCheck", "carried_platforms", "check_binary", "objdump"]
@@ -74,7 +76,7 @@ def carried_platforms(fmu_path: str | Path, fmi_version: int = 2) -> dict[str, s
 def _run(tool: str, *args: str) -> str:
     proc = subprocess.run([tool, *args], capture_output=True, text=True, check=False)
     if proc.returncode != 0:
-        raise ValueError(" ".join(proc.stderr.split())[:200] or f"exit {proc.returncode}")
+        raise ToolchainError(" ".join(proc.stderr.split())[:200] or f"exit {proc.returncode}")
     return proc.stdout
 
 
@@ -119,7 +121,7 @@ def check_binary(path: str | Path, target: Platform, tool: str, *, prefix: str =
                 result.imports = re.findall(r"DLL Name: (\S+)", private)
                 exports = private.split("Export Table:", 1)[1] if "Export Table:" in private else ""
                 result.exports = re.findall(r"^\s+\d+\s+0x[0-9a-f]+\s+(\S+)", exports, re.M)
-    except ValueError as exc:
+    except ToolchainError as exc:
         result.problems.append(f"llvm-objdump cannot read it ({exc})")
         return result
     others = sorted(s for s in result.exports if not s.startswith(prefix))

@@ -89,7 +89,7 @@ def tool_version() -> str:
 
 def _check_version(fmi_version: int) -> int:
     if fmi_version not in FMI_VERSIONS:
-        raise InputError(f"fmi_version: expected one of {list(FMI_VERSIONS)}, got {fmi_version!r}")
+        raise InputError(f"expected one of {list(FMI_VERSIONS)}, got {fmi_version!r}", parameter="fmi_version")
     return fmi_version
 
 
@@ -205,7 +205,7 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, fmi_version: int
     """Generate, compile (for the host and ``platforms``) and zip the FMI ``fmi_version`` FMU of ``spec`` into ``path``."""
     path = Path(path)
     if path.suffix != ".fmu":
-        raise InputError(f"path: expected a file name ending in .fmu, got {str(path)!r}")
+        raise InputError(f"expected a file name ending in .fmu, got {str(path)!r}", parameter="path")
     fmi_version = _check_version(fmi_version)
     targets = _targets(platforms)
     path.parent.mkdir(parents=True, exist_ok=True)

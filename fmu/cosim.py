@@ -123,11 +123,11 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
         log_output_level(CosimLogLevel.WARNING)
     path = Path(fmu_path).resolve()
     if not path.is_file():
-        raise CosimError(f"fmu_path: expected an FMU file, got {str(path)!r}")
+        raise CosimError(f"expected an FMU file, got {str(path)!r}", parameter="fmu_path")
     check_fmu_archive(path)  # before libcosim extracts it
     step_ns = int(round(step * NS_PER_S))
     if step_ns <= 0:
-        raise CosimError(f"step: expected at least 1 ns, got {step!r} s")
+        raise CosimError(f"expected at least 1 ns, got {step!r} s", parameter="step")
     n_steps = int(round(stop_time / step))
 
     execution = CosimExecution.from_step_size(step_ns)

@@ -113,11 +113,11 @@ def platform_folder(name: str, fmi_version: int) -> str:
     ('darwin64', 'aarch64-darwin')
     """
     if fmi_version not in (2, 3):
-        raise ValueError(f"fmi_version: expected 2 or 3, got {fmi_version!r}")
+        raise InputError(f"expected 2 or 3, got {fmi_version!r}", parameter="fmi_version")
     try:
         target = _BY_NAME[name]
     except KeyError:
-        raise ValueError(f"platform: expected one of {', '.join(_BY_NAME)}, got {name!r}") from None
+        raise InputError(f"expected one of {', '.join(_BY_NAME)}, got {name!r}", parameter="platform") from None
     return target.fmi2_folder if fmi_version == 2 else target.fmi3_folder
 
 

@@ -17,6 +17,7 @@ import json
 import zipfile
 from pathlib import Path
 from typing import Any
+from model.errors import InputError
 
 __all__ = ["ROBOT_RESOURCE", "description_to_json", "description_from_json", "read_robot", "read_robot_resource",
            "robot_from_json", "robot_to_json"]
@@ -85,7 +86,7 @@ def description_from_json(text: str, source: str = ROBOT_RESOURCE) -> Any:
     try:
         doc = json.loads(text)
         if doc.get("format") not in (_FORMAT, _FORMAT_ROBOT):
-            raise ValueError(f"format {doc.get('format')!r}, expected {_FORMAT_ROBOT!r} or {_FORMAT!r}")
+            raise InputError(f"format {doc.get('format')!r}, expected {_FORMAT_ROBOT!r} or {_FORMAT!r}")
         data = dict(doc["description"])
         if len(data["links"]) > MAX_JOINTS:
             raise RobotDescriptionError(f"{source}: {len(data['links'])} links: more than the joint-count limit "
@@ -123,7 +124,7 @@ def robot_from_json(text: str, source: str = ROBOT_RESOURCE, motor_model: str = 
         values = doc["parameters"]
         layout = robot.parameters.layout
         if not isinstance(values, dict) or sorted(values) != sorted(layout.names):
-            raise ValueError(f"parameters: expected the names {list(layout.names)}")
+            raise InputError(f"parameters: expected the names {list(layout.names)}")
         return robot.with_parameters(type(robot.parameters)(layout, [float(values[k]) for k in layout.names]))
     except (ValueError, KeyError, TypeError) as exc:
         raise RobotDescriptionError(f"{source}: not a robot of this workbench: {exc}") from None

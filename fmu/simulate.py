@@ -22,6 +22,8 @@ from typing import Sequence
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
+from model.errors import InputError
+
 from .archive import check_fmu_archive, model_description_xml
 
 __all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names", "fmi_version"]
@@ -121,9 +123,9 @@ def step_input(names: Sequence[str], t_switch: np.ndarray, values: np.ndarray) -
     t_switch = np.asarray(t_switch, dtype=float)
     values = np.asarray(values, dtype=float)
     if values.shape != (t_switch.size, len(names)):
-        raise ValueError(f"values: expected shape ({t_switch.size}, {len(names)}), got {values.shape}")
+        raise InputError(f"expected shape ({t_switch.size}, {len(names)}), got {values.shape}", parameter="values")
     if np.any(np.diff(t_switch) <= 0):
-        raise ValueError("t_switch: expected strictly increasing switching times")
+        raise InputError("expected strictly increasing switching times", parameter="t_switch")
     rows_t = [t_switch[0]]
     rows_v = [values[0]]
     for i in range(1, t_switch.size):

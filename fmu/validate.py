@@ -27,6 +27,7 @@ would run.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import shutil
@@ -40,9 +41,10 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from model.errors import InputError, NumericalError
+
 from .archive import check_fmu_archive, model_description_xml
 from .variables import substeps
-from model.errors import InputError
 from model.limits import MAX_SAMPLES
 
 __all__ = [
@@ -142,7 +144,7 @@ def feedforward_profile(robot: Any, t_end: float = 3.0, hold: float = 0.01) -> T
 
     k = int(round(t_end / hold))
     if k < 1 or abs(k * hold - t_end) > 1e-9 * t_end:
-        raise InputError(f"t_end: expected a whole number of hold intervals of {hold} s, got {t_end}")
+        raise InputError(f"expected a whole number of hold intervals of {hold} s, got {t_end}", parameter="t_end")
     tasks = robot_tasks(robot.description)
     if tasks:
         task = next(iter(tasks.values()))
@@ -381,7 +383,7 @@ def tracking_error(label: str, t: np.ndarray, X: np.ndarray, P: np.ndarray, t_re
     # the last sample at each time: Model Exchange results repeat the time of an event (before, after)
     idx = [t.size - 1 - int(np.argmin(np.abs(t[::-1] - tr))) for tr in t_ref]
     if np.max(np.abs(t[idx] - t_ref)) > 1e-9:
-        raise ValueError("tracking_error: the run does not sample every reference time")
+        raise InputError("the run does not sample every reference time", parameter="tracking_error")
     n = X.shape[1] // 2
     dX = np.abs(X[idx] - X_ref)
     dP = np.linalg.norm(P[idx] - P_ref, axis=1)
@@ -777,9 +779,12 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     model end earlier where the open-loop arm diverges (:func:`divergence_horizon`).
     Nothing but the FMU is needed: the robot comes from its ``resources/robot.json``.
     """
+    if not (math.isfinite(step) and 0 < step <= t_end):
+        raise InputError(f"expected a communication step > 0 and no longer than the horizon of {t_end:g} s, got "
+                         f"{step:g} s", parameter="step")
     if t_end / step + 1 > MAX_SAMPLES:  # before any work: the runs sample every step
-        raise InputError(f"t_end: {t_end:g} s at a step of {step:g} s: {t_end / step + 1:.4g} samples, more than the "
-                         f"sample limit of {MAX_SAMPLES}")
+        raise InputError(f"{t_end:g} s at a step of {step:g} s: {t_end / step + 1:.4g} samples, more than the "
+                         f"sample limit of {MAX_SAMPLES}", parameter="t_end")
     fmu_path = str(fmu_path)
     check_fmu_archive(fmu_path)  # FmuArchiveError (a ValueError) naming the file, before anything is extracted
     _say(progress, "validating modelDescription.xml with FMPy")

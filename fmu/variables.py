@@ -33,6 +33,7 @@ from xml.sax.saxutils import quoteattr
 
 import casadi as ca
 import numpy as np
+from model.errors import InputError
 
 __all__ = [
     "TEMPLATE_DIR",
@@ -119,11 +120,13 @@ class DiscreteStates:
     def __post_init__(self) -> None:
         nd = len(self.states)
         if np.shape(self.start) != (nd,) or not np.all(np.isfinite(self.start)):
-            raise ValueError(f"discrete.start: expected {nd} finite values, got {np.asarray(self.start).tolist()}")
+            raise InputError(f"expected {nd} finite values, got {np.asarray(self.start).tolist()}",
+                             parameter="discrete.start")
         if not (math.isfinite(self.period) and self.period > 0):
-            raise ValueError(f"discrete.period: expected a positive sample period in s, got {self.period!r}")
+            raise InputError(f"expected a positive sample period in s, got {self.period!r}",
+                             parameter="discrete.period")
         if self.tick.n_in() != 4 or self.tick.numel_in(3) != nd or self.tick.numel_out(0) != nd:
-            raise ValueError(f"discrete.tick: expected (x, u, p, d) -> d_next with {nd} sampled states")
+            raise InputError(f"expected (x, u, p, d) -> d_next with {nd} sampled states", parameter="discrete.tick")
 
 
 @dataclass(frozen=True)
@@ -165,42 +168,43 @@ class ModelSpec:
 
     def __post_init__(self) -> None:
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", self.model_identifier):
-            raise ValueError(f"model_identifier: expected a C identifier, got {self.model_identifier!r}")
+            raise InputError(f"expected a C identifier, got {self.model_identifier!r}", parameter="model_identifier")
         nx, nu, np_, ny = len(self.states), len(self.inputs), len(self.params), len(self.outputs)
         expected = {"ode inputs": [nx, nu, np_], "out inputs": [nx, nu, np_]}
         got = {"ode inputs": [self.ode.numel_in(i) for i in range(3)],
                "out inputs": [self.out.numel_in(i) for i in range(3)]}
         for key in expected:
             if got[key] != expected[key]:
-                raise ValueError(f"{key}: expected sizes (x, u, p) = {expected[key]}, got {got[key]}")
+                raise InputError(f"expected sizes (x, u, p) = {expected[key]}, got {got[key]}", parameter=key)
         if self.discrete is not None and self.modes is not None:
-            raise ValueError("discrete: a model with sampled states has no friction modes")
+            raise InputError("a model with sampled states has no friction modes", parameter="discrete")
         extra = ", d" if self.discrete is not None else ", m" if self.modes is not None else ""
         ode_in = 3 + bool(extra)
         out_in = 4 if self.discrete is not None else 3
         if self.ode.n_in() != ode_in or self.out.n_in() != out_in:
-            raise ValueError(f"ode, out: expected {ode_in} and {out_in} inputs (x, u, p{extra}), got "
+            raise InputError(f"ode, out: expected {ode_in} and {out_in} inputs (x, u, p{extra}), got "
                              f"{self.ode.n_in()} and {self.out.n_in()}")
         if self.ode.numel_out(0) != nx:
-            raise ValueError(f"ode output: expected {nx} entries, got {self.ode.numel_out(0)}")
+            raise InputError(f"ode output: expected {nx} entries, got {self.ode.numel_out(0)}")
         if self.out.numel_out(0) != ny:
-            raise ValueError(f"out output: expected {ny} entries, got {self.out.numel_out(0)}")
+            raise InputError(f"out output: expected {ny} entries, got {self.out.numel_out(0)}")
         for name, arr, n in (("x_start", self.x_start, nx), ("p_start", self.p_start, np_)):
             if np.shape(arr) != (n,) or not np.all(np.isfinite(arr)):
-                raise ValueError(f"{name}: expected {n} finite values, got {np.asarray(arr).tolist()}")
+                raise InputError(f"expected {n} finite values, got {np.asarray(arr).tolist()}", parameter=name)
         if len(self.p_tunable) != np_ or len(self.p_min) != np_ or len(self.p_max) != np_:
-            raise ValueError(f"p_tunable, p_min, p_max: expected {np_} entries each")
+            raise InputError(f"p_tunable, p_min, p_max: expected {np_} entries each")
         for i, q in enumerate(self.params):
             lo, hi, v = self.p_min[i], self.p_max[i], float(self.p_start[i])
             if (lo is not None and v < lo) or (hi is not None and v > hi):
-                raise ValueError(f"p_start: parameter {q.name} = {v} is outside its range [{lo}, {hi}]")
+                raise InputError(f"parameter {q.name} = {v} is outside its range [{lo}, {hi}]", parameter="p_start")
         if len(self.output_state) != ny or any(not -1 <= k < nx for k in self.output_state):
-            raise ValueError(f"output_state: expected {ny} state indices in [-1, {nx - 1}], got {self.output_state}")
+            raise InputError(f"expected {ny} state indices in [-1, {nx - 1}], got {self.output_state}",
+                             parameter="output_state")
         if not (math.isfinite(self.step) and self.step > 0):
-            raise ValueError(f"step: expected a positive internal step in s, got {self.step!r}")
+            raise InputError(f"expected a positive internal step in s, got {self.step!r}", parameter="step")
         if self.step < MIN_STEP:
-            raise ValueError(f"step: expected an internal step of at least {MIN_STEP:g} s (the min of {STEP_NAME}), "
-                             f"got {self.step!r}")
+            raise InputError(f"expected an internal step of at least {MIN_STEP:g} s (the min of {STEP_NAME}), "
+                             f"got {self.step!r}", parameter="step")
 
 
 @dataclass(frozen=True)
@@ -302,7 +306,7 @@ class VariableTable:
             i = j
         names = [g.name for g in groups]
         if len(set(names)) != len(names) or "time" in names:
-            raise ValueError(f"FMI 3.0 variables: expected unique array names besides 'time', got {names}")
+            raise InputError(f"FMI 3.0 variables: expected unique array names besides 'time', got {names}")
         return tuple(groups)
 
     # ------------------------------------------------------------ rendering
@@ -602,13 +606,13 @@ def build_table(spec: ModelSpec) -> VariableTable:
     names = [v.name for v in variables]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
-        raise ValueError(f"variable names: expected unique names, got duplicates {duplicates}")
+        raise InputError(f"variable names: expected unique names, got duplicates {duplicates}")
     bad = [n for n in names if not is_structured_name(n.removeprefix("der(").removesuffix(")"))]
     if bad:
-        raise ValueError(f"variable names: expected structured FMI names such as 'q[1]', got {bad}")
+        raise InputError(f"variable names: expected structured FMI names such as 'q[1]', got {bad}")
     c_names = [_c_identifier(n) for n in names]
     if len(set(c_names)) != len(c_names):
-        raise ValueError("variable names: two names map to the same C identifier")
+        raise InputError("variable names: two names map to the same C identifier")
 
     # Exact structural dependencies from the CasADi Jacobian sparsity.
     def deps(f: ca.Function, row: int, with_params: bool) -> tuple[int, ...]:
@@ -656,12 +660,12 @@ def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None
     robot = plant.robot
     n = int(plant.n)
     if getattr(plant, "link_mass_scale", False):
-        raise ValueError("plant: expected the plant of a robot (build_plant(robot)), got a kernel plant with a "
-                         "link-mass scale")
+        raise InputError("expected the plant of a robot (build_plant(robot)), got a kernel plant with a "
+                         "link-mass scale", parameter="plant")
     out_names = list(plant.output_names)
     if len(out_names) != 3 * n + 6:
-        raise ValueError(f"plant.output_names: expected 3n + 6 = {3 * n + 6} outputs [q, qd, G q, tool position, "
-                         f"tool orientation], got {len(out_names)}")
+        raise InputError(f"expected 3n + 6 = {3 * n + 6} outputs [q, qd, G q, tool position, "
+                         f"tool orientation], got {len(out_names)}", parameter="plant.output_names")
     units, texts = list(plant.output_units), list(plant.output_descriptions)
     states = tuple(Quantity(out_names[k], units[k], texts[k]) for k in range(2 * n))
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
@@ -679,7 +683,7 @@ def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None
     x_probe = np.random.default_rng(0).standard_normal(2 * n)
     y_probe = np.asarray(plant.out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
     if not np.array_equal(y_probe[:2 * n], x_probe):
-        raise ValueError("plant.out: expected the first 2n outputs to be the state [q; qd] itself")
+        raise InputError("expected the first 2n outputs to be the state [q; qd] itself", parameter="plant.out")
     identifier = model_identifier or robot.description.identifier
     if identifier[0].isdigit():
         identifier = "m_" + identifier
@@ -709,7 +713,7 @@ def trivial_spec(step: float = 1e-3, n_inputs: int = 1) -> ModelSpec:
     compared with, so that setting the inputs costs the importer the same.
     """
     if n_inputs < 1:
-        raise ValueError(f"n_inputs: expected at least 1 input, got {n_inputs}")
+        raise InputError(f"expected at least 1 input, got {n_inputs}", parameter="n_inputs")
     x, u, p = ca.SX.sym("x", 1), ca.SX.sym("u", n_inputs), ca.SX.sym("p", 1)
     ode = ca.Function("ode", [x, u, p], [p * (ca.sum1(u) - x)], ["x", "u", "p"], ["xdot"])
     out = ca.Function("out", [x, u, p], [x], ["x", "u", "p"], ["y"])
@@ -738,7 +742,7 @@ def _template(name: str) -> string.Template:
 def _xml_number(x: float) -> str:
     x = float(x)
     if not math.isfinite(x):
-        raise ValueError(f"expected a finite number for modelDescription.xml, got {x!r}")
+        raise InputError(f"expected a finite number for modelDescription.xml, got {x!r}")
     return repr(x)
 
 

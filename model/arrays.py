@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from .errors import InputError
 
 __all__ = ["as_joint_vector", "shaped_vector", "finite_vector", "joint_batch"]
 
@@ -19,7 +20,7 @@ def shaped_vector(value: Any, size: int, name: str, what: str = "values") -> np.
     arr = np.asarray(value, dtype=float)
     if arr.shape != (size,):
         if arr.shape not in ((size, 1), (1, size)):
-            raise ValueError(f"{name}: expected {size} {what}, got an array of shape {np.shape(value)}")
+            raise InputError(f"expected {size} {what}, got an array of shape {np.shape(value)}", parameter=name)
         arr = arr.reshape(size)
     return arr
 
@@ -28,7 +29,7 @@ def finite_vector(value: Any, size: int, name: str, what: str = "values") -> np.
     """:func:`shaped_vector`, also finite and C-contiguous."""
     arr = shaped_vector(value, size, name, what)
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
+        raise InputError(f"expected finite values, got {arr.tolist()}", parameter=name)
     return np.ascontiguousarray(arr)
 
 
@@ -41,8 +42,8 @@ def joint_batch(value: Any, n: int, name: str = "Q") -> np.ndarray:
     """``value`` as a finite, C-contiguous float64 array of shape (N, n); a ValueError naming ``name`` and the bad rows otherwise."""
     arr = np.ascontiguousarray(value, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != n:
-        raise ValueError(f"{name}: expected an (N, {n}) array, got shape {np.shape(value)}")
+        raise InputError(f"expected an (N, {n}) array, got shape {np.shape(value)}", parameter=name)
     if not np.all(np.isfinite(arr)):
         rows = np.unique(np.nonzero(~np.isfinite(arr))[0])
-        raise ValueError(f"{name}: expected finite values; rows {rows[:5].tolist()} are not")
+        raise InputError(f"expected finite values; rows {rows[:5].tolist()} are not", parameter=name)
     return arr

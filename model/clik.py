@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from .trajectory import straight_line
+from .errors import InputError, NumericalError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .robot import Robot
@@ -121,7 +122,8 @@ def _gain(K: Any, m: int) -> np.ndarray:
     elif arr.shape == (m,):
         arr = np.diag(arr)
     if arr.shape != (m, m) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"K: expected a scalar, {m} values or an ({m}, {m}) matrix of gains in 1/s, got shape {np.shape(K)}")
+        raise InputError(f"expected a scalar, {m} values or an ({m}, {m}) matrix of gains in 1/s, got shape "
+                         f"{np.shape(K)}", parameter="K")
     return arr
 
 
@@ -170,30 +172,33 @@ def clik(
 
     Raises
     ------
-    ValueError
-        Bad arguments, or ``"inverse"`` meeting an exactly singular Jacobian.
+    model.errors.InputError
+        Bad arguments (a ``ValueError``; ``parameter`` names the argument).
+    model.errors.NumericalError
+        ``"inverse"`` meeting an exactly singular Jacobian.
     """
     if inversion not in INVERSIONS:
-        raise ValueError(f"inversion: expected one of {INVERSIONS}, got {inversion!r}")
+        raise InputError(f"expected one of {INVERSIONS}, got {inversion!r}", parameter="inversion")
     sel = np.asarray(mask, dtype=bool).reshape(-1)
     if sel.shape != (3,) or not sel.any():
-        raise ValueError(f"mask: expected 3 booleans on [x y z], at least one true; got {mask!r}")
+        raise InputError(f"expected 3 booleans on [x y z], at least one true; got {mask!r}", parameter="mask")
     m, n = int(sel.sum()), robot.n
     if inversion == "inverse" and m != n:
-        raise ValueError(f"inversion 'inverse': needs a square task Jacobian, got {m} components for {n} joints; use 'pinv' or 'dls'")
+        raise InputError(f"'inverse' needs a square task Jacobian, got {m} components for {n} joints; use 'pinv' "
+                         "or 'dls'", parameter="inversion")
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt: expected a step > 0 s, got {dt!r}")
+        raise InputError(f"expected a step > 0 s, got {dt!r}", parameter="dt")
     if not damping >= 0:
-        raise ValueError(f"damping: expected a value >= 0 m^2, got {damping!r}")
+        raise InputError(f"expected a value >= 0 m^2, got {damping!r}", parameter="damping")
     start = float(getattr(path, "t0", 0.0) if t0 is None else t0)
     if tf is None:
         if not hasattr(path, "T"):
-            raise ValueError("tf: the path has no duration attribute T; give tf (s)")
+            raise InputError("the path has no duration attribute T; give tf (s)", parameter="tf")
         tf = start + float(path.T)  # type: ignore[attr-defined]
     steps_float = (tf - start) / dt
     N = int(round(steps_float))
     if N < 1 or abs(steps_float - N) > 1e-9 * max(1.0, steps_float):
-        raise ValueError(f"tf - t0 = {tf - start!r} s: expected a positive integer multiple of dt = {dt!r} s")
+        raise InputError(f"tf - t0 = {tf - start!r} s: expected a positive integer multiple of dt = {dt!r} s")
     gain = _gain(K, m)
     q = np.asarray(q0, dtype=float).reshape(n).copy()
     t = start + dt * np.arange(N + 1)
@@ -210,7 +215,8 @@ def clik(
             try:
                 qd = np.linalg.solve(J, v)
             except np.linalg.LinAlgError as exc:
-                raise ValueError(f"inversion 'inverse': singular Jacobian at t = {t[k]:.6g} s, q = {q.tolist()}") from exc
+                raise NumericalError(f"inversion 'inverse': singular Jacobian at t = {t[k]:.6g} s, q = {q.tolist()}"
+                                     ) from exc
         elif inversion == "pinv":
             qd = np.linalg.pinv(J) @ v
         elif inversion == "transpose":

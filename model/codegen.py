@@ -58,7 +58,7 @@ from typing import Callable, Mapping, Sequence
 import casadi as ca
 import numpy as np
 
-from .errors import ToolchainError
+from .errors import InputError, NumericalError, ToolchainError
 
 __all__ = [
     "ABI_HEADER",
@@ -272,7 +272,7 @@ def find_compiler() -> str:
     for cmd in candidates:
         if cmd and shutil.which(cmd):
             return cmd
-    raise CompilerNotFoundError(f"CC: no C compiler found (tried {candidates}); install gcc or set CC")
+    raise CompilerNotFoundError(f"no C compiler found (tried {candidates}); install gcc or set CC", parameter="CC")
 
 
 def build_jobs() -> int:
@@ -284,7 +284,7 @@ def build_jobs() -> int:
         except ValueError:
             jobs = 0
         if jobs < 1:
-            raise ValueError(f"MANIP_BUILD_JOBS: expected a whole number >= 1, got {env!r}")
+            raise InputError(f"expected a whole number >= 1, got {env!r}", parameter="MANIP_BUILD_JOBS")
         return jobs
     return os.cpu_count() or 1
 
@@ -320,7 +320,7 @@ def generate_c(functions: Sequence[ca.Function], path: Path, *, with_header: boo
     """
     path = Path(path)
     if _c_identifier(path.stem) != path.stem:
-        raise ValueError(f"path: expected a file stem that is a C identifier, got {path.stem!r}")
+        raise InputError(f"expected a file stem that is a C identifier, got {path.stem!r}", parameter="path")
     gen = ca.CodeGenerator(path.name, {"with_header": with_header, "casadi_int": CASADI_INT, "casadi_real": CASADI_REAL})
     for f in functions:
         gen.add(f)
@@ -437,13 +437,13 @@ class CompiledLibrary:
         strides = []
         for arr, size, arg in zip(inputs, sig.in_sizes, sig.in_names):
             if arr.dtype != np.float64 or not arr.flags.c_contiguous:
-                raise ValueError(f"{arg}: expected a C-contiguous float64 array")
+                raise InputError("expected a C-contiguous float64 array", parameter=arg)
             if arr.shape == (size,):
                 strides.append(0)
             elif arr.shape == (n_points, size):
                 strides.append(size)
             else:
-                raise ValueError(f"{arg}: expected shape ({n_points}, {size}) or ({size},), got {arr.shape}")
+                raise InputError(f"expected shape ({n_points}, {size}) or ({size},), got {arr.shape}", parameter=arg)
         outputs = [np.empty((n_points, r * c)) for r, c in sig.out_shapes]
         n_in, n_out = len(inputs), len(outputs)
         in_ptr = (ctypes.c_void_p * n_in)(*[a.ctypes.data for a in inputs])
@@ -453,7 +453,7 @@ class CompiledLibrary:
         f_ptr, w_ptr = self._pointers[name]
         status = self._batch(f_ptr, w_ptr, n_in, in_ptr, in_str, n_out, out_ptr, out_str, n_points)
         if status != 0:
-            raise RuntimeError(f"{name}: compiled evaluation failed with status {status}")
+            raise NumericalError(f"{name}: compiled evaluation failed with status {status}")
         return outputs
 
 
@@ -492,7 +492,8 @@ class PointEvaluator:
         sig = library.signatures[name]
         external = dict(external or {})
         if not set(external) <= set(range(len(sig.in_sizes))):
-            raise ValueError(f"{name}: external inputs {sorted(external)} out of range 0..{len(sig.in_sizes) - 1}")
+            raise InputError(f"external inputs {sorted(external)} out of range 0..{len(sig.in_sizes) - 1}",
+                             parameter=name)
         self.name, self.signature, self._lib = name, sig, library
         internal = [j for j in range(len(sig.in_sizes)) if j not in external]
         self.block = np.zeros(sum(sig.in_sizes[j] for j in internal))
@@ -507,10 +508,10 @@ class PointEvaluator:
         sizes = [_CTYPES_INT(0) for _ in range(4)]
         work = ctypes.CFUNCTYPE(ctypes.c_int, *[ctypes.POINTER(_CTYPES_INT)] * 4)(w_ptr)
         if work(*[ctypes.byref(s) for s in sizes]) != 0:
-            raise RuntimeError(f"{name}: work-size query failed")
+            raise ToolchainError(f"{name}: work-size query of the compiled library failed")
         sz_arg, sz_res, sz_iw, sz_w = (s.value for s in sizes)
         if sz_arg < len(sig.in_sizes) or sz_res < len(sig.out_shapes):
-            raise RuntimeError(f"{name}: work sizes smaller than the signature")
+            raise ToolchainError(f"{name}: the compiled library's work sizes are smaller than its signature")
         self._arg = (ctypes.c_void_p * sz_arg)()
         self._res = (ctypes.c_void_p * sz_res)(*[o.ctypes.data for o in self.outputs])
         self._iw = (_CTYPES_INT * max(sz_iw, 1))()
@@ -528,11 +529,11 @@ class PointEvaluator:
         """Read input ``j`` from ``array`` in place (kept referenced) from now on."""
         size, arg = self.signature.in_sizes[j], self.signature.in_names[j]
         if self.inputs[j] is not None:
-            raise ValueError(f"{arg}: not an external input of {self.name}")
+            raise InputError(f"not an external input of {self.name}", parameter=arg)
         if not isinstance(array, np.ndarray) or array.dtype != np.float64 or not array.flags.c_contiguous:
-            raise ValueError(f"{arg}: expected a C-contiguous float64 array")
+            raise InputError("expected a C-contiguous float64 array", parameter=arg)
         if array.shape != (size,):
-            raise ValueError(f"{arg}: expected shape ({size},), got {array.shape}")
+            raise InputError(f"expected shape ({size},), got {array.shape}", parameter=arg)
         self._arg[j] = array.ctypes.data
         self.bound[j] = array
 
@@ -540,7 +541,7 @@ class PointEvaluator:
         """Evaluate at the point held by the input buffers; the results land in :attr:`outputs`."""
         status = self._fn(self._arg, self._res, self._iw, self._w, 0)
         if status != 0:
-            raise RuntimeError(f"{self.name}: compiled evaluation failed with status {status}")
+            raise NumericalError(f"{self.name}: compiled evaluation failed with status {status}")
 
 
 @lru_cache(maxsize=None)
@@ -683,7 +684,7 @@ def build_library(
     names = [f.name() for f in functions]
     bad = [name for name in names if _c_identifier(name) != name or names.count(name) > 1]
     if bad:
-        raise ValueError(f"functions: expected distinct names that are C identifiers, got {bad}")
+        raise InputError(f"expected distinct names that are C identifiers, got {bad}", parameter="functions")
     instructions = {f.name(): int(f.n_instructions()) for f in functions}
     say("symbolic", f"{len(functions)} functions, {sum(instructions.values()):,} operations "
                     f"({', '.join(f'{k} {v:,}' for k, v in instructions.items())})")

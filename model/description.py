@@ -55,6 +55,9 @@ __all__ = [
     "JOINT_TYPES",
     "TORQUE_LIMIT_FROM_FILE",
     "TORQUE_LIMIT_FROM_RULE",
+    "FROM_DEFAULT",
+    "FROM_FILE",
+    "FROM_URDF",
     "identifier_from_name",
     "pose_matrix",
     "rpy_matrix",
@@ -67,6 +70,11 @@ BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "sph
 #: default rule (``control_design.joint_model.TORQUE_LIMIT_RULE``) when the file states none.
 TORQUE_LIMIT_FROM_FILE = "robot file"
 TORQUE_LIMIT_FROM_RULE = "default rule"
+#: Where a link's friction coefficients come from: its robot file, the URDF's ``<dynamics damping friction>``
+#: (converted to the motor side through the gear ratio), or the default 0.
+FROM_FILE = "robot file"
+FROM_URDF = "URDF"
+FROM_DEFAULT = "default"
 JOINT_TYPES = ("revolute", "prismatic")
 CONVENTIONS = ("standard", "modified", "urdf")
 #: The accepted spellings of the ``[units]`` table: SI only, one entry per quantity.
@@ -125,6 +133,10 @@ class LinkDescription:
     # the joint; com and inertia (about the com) are in link frame i.
     origin: tuple[float, ...] | None = None
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    # Largest joint speed (rad/s or m/s, joint side); None when the file states none.
+    velocity_limit: float | None = None
+    # Where viscous_friction and coulomb_friction come from: FROM_FILE, FROM_URDF or FROM_DEFAULT each.
+    friction_source: tuple[str, str] = field(default=(FROM_DEFAULT, FROM_DEFAULT), compare=False)
 
     @property
     def is_revolute(self) -> bool:
@@ -199,8 +211,21 @@ class RobotDescription:
 
     @property
     def q_rest(self) -> np.ndarray:
-        """Rest configuration (m or rad per joint); zeros if the file gives none."""
-        return np.zeros(self.n) if self.rest is None else np.array(self.rest, dtype=float)
+        """Rest configuration (m or rad per joint): the file's ``rest`` (within ``qlim``, checked when read), else the
+        point of the joint box ``qlim`` nearest to zero (0 where a joint's range holds it, else its nearer limit).
+
+        Everything that starts the arm somewhere reads this one property: ``manip info``, the FMU's start
+        values, ``validate-fmu``, the workspace figure, the generic tour (and so ``track``) and ``teach``.
+        """
+        if self.rest is not None:
+            return np.array(self.rest, dtype=float)
+        lo, hi = self.qlim
+        return np.clip(np.zeros(self.n), lo, hi) + 0.0  # + 0.0: no -0.0
+
+    def friction_source(self, i: int) -> tuple[str, str]:
+        """Where joint ``i``'s (0-based) viscous and Coulomb friction come from: :data:`FROM_FILE`,
+        :data:`FROM_URDF` or :data:`FROM_DEFAULT` each."""
+        return self.links[i].friction_source
 
     def torque_limit_source(self, i: int) -> str:
         """Where motor ``i``'s (0-based) torque limit comes from: :data:`TORQUE_LIMIT_FROM_FILE` or :data:`TORQUE_LIMIT_FROM_RULE`."""
@@ -224,7 +249,8 @@ class RobotDescription:
             "convention": self.convention, "base": self.base, "tool": self.tool, "tip": self.tip,
             "gravity": self.gravity,
             "links": [
-                {k: v for k, v in dataclasses.asdict(lk).items() if k not in ("name", "qlim", "torque_limit")}
+                {k: v for k, v in dataclasses.asdict(lk).items()
+                 if k not in ("name", "qlim", "torque_limit", "velocity_limit", "friction_source")}
                 for lk in self.links
             ],
         }
@@ -299,7 +325,8 @@ _TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks", "
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
     "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
-    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source", "flip", "inertia_note",
+    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "velocity_limit", "source", "flip",
+    "inertia_note",
 )
 _POSE_KEYS = ("xyz", "rpy")
 _TASK_REQUIRED = ("name", "waypoints")
@@ -456,12 +483,16 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
             if not isinstance(data["name"], str):
                 raise w.fail(i, "name", data["name"], "a string")
             kw["name"] = data["name"]
-    if "torque_limit" in data:
-        with w.collect():
-            limit = _number(w, i, "torque_limit", data["torque_limit"])
-            if limit <= 0:
-                raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
-            kw["torque_limit"] = limit
+    for key, expected in (("torque_limit", "a motor torque rating > 0 (N m)"),
+                          ("velocity_limit", "a joint speed limit > 0 (rad/s or m/s)")):
+        if key in data:
+            with w.collect():
+                limit = _number(w, i, key, data[key])
+                if limit <= 0:
+                    raise w.fail(i, key, data[key], expected)
+                kw[key] = limit
+    kw["friction_source"] = tuple(FROM_FILE if key in data else FROM_DEFAULT
+                                  for key in ("viscous_friction", "coulomb_friction"))
     if "flip" in data:
         with w.collect():
             if not isinstance(data["flip"], bool):

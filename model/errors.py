@@ -11,6 +11,16 @@ may catch ``ValueError`` for bad input as before:
 * :class:`InputError` (``ValueError``): the user's input is invalid.
 * :class:`NumericalError` (``ArithmeticError``): a computation left finite numbers.
 * :class:`ToolchainError` (``RuntimeError``): an external tool (compiler, libcosim) failed.
+
+An error about one parameter of a function names it in the field :attr:`WorkbenchError.parameter`
+(the library's name, e.g. ``"link_mass_scale"``), not only in its text: ``str(error)`` is
+``"link_mass_scale: expected a factor > 0, got 0.0"`` and :attr:`WorkbenchError.detail` the text
+after the name, so that the command line can put the flag the user typed in its place
+(``--mass-scale: expected ...``) without reading the message.
+
+>>> err = InputError("expected a factor > 0, got 0.0", parameter="link_mass_scale")
+>>> str(err), err.parameter, err.detail
+('link_mass_scale: expected a factor > 0, got 0.0', 'link_mass_scale', 'expected a factor > 0, got 0.0')
 """
 
 from __future__ import annotations
@@ -23,7 +33,29 @@ __all__ = ["InputError", "NumericalError", "SingularDynamicsError", "ToolchainEr
 
 
 class WorkbenchError(Exception):
-    """Base class of every expected error of the workbench; its message is one line for the user."""
+    """Base class of every expected error of the workbench; its message is one line for the user.
+
+    Parameters
+    ----------
+    *args
+        The message (what is wrong, the value, what was expected), as for any exception.
+    parameter
+        The parameter of the library call the error concerns (``"bandwidth"``), or None. When given,
+        the message does not repeat it: ``str(error)`` puts it in front.
+    """
+
+    def __init__(self, *args: object, parameter: str | None = None) -> None:
+        super().__init__(*args)
+        self.parameter = parameter
+
+    @property
+    def detail(self) -> str:
+        """The message without the parameter name in front (the whole message when there is none)."""
+        return super().__str__()
+
+    def __str__(self) -> str:
+        parameter = getattr(self, "parameter", None)  # a subclass may skip this __init__
+        return f"{parameter}: {self.detail}" if parameter else self.detail
 
 
 class InputError(WorkbenchError, ValueError):
@@ -35,8 +67,8 @@ class InputError(WorkbenchError, ValueError):
     them, one per line. Build such an error with :meth:`collected`.
     """
 
-    def __init__(self, *args: object, problems: Sequence[str] = ()) -> None:
-        super().__init__(*args)
+    def __init__(self, *args: object, problems: Sequence[str] = (), parameter: str | None = None) -> None:
+        super().__init__(*args, parameter=parameter)
         self._problems = tuple(problems)
 
     @property

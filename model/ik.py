@@ -22,6 +22,7 @@ from .closed_form import (
     closed_form_for,
     require_closed_form,
 )
+from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .arm import KinematicArm
@@ -46,10 +47,11 @@ _FREE_SPAN = {True: (-math.pi, math.pi), False: (-1.0, 1.0)}
 def _check_pose(T: Any) -> np.ndarray:
     arr = np.asarray(T, dtype=float)
     if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"T: expected a finite (4, 4) homogeneous transform, got shape {arr.shape}")
+        raise InputError(f"expected a finite (4, 4) homogeneous transform, got shape {arr.shape}", parameter="T")
     R = arr[:3, :3]
     if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
-        raise ValueError("T: expected a rotation block with orthonormal columns and det +1 (tolerance 1e-6)")
+        raise InputError("expected a rotation block with orthonormal columns and det +1 (tolerance 1e-6)",
+                         parameter="T")
     return arr
 
 
@@ -210,7 +212,7 @@ def default_mask(robot: "KinematicArm") -> np.ndarray:
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Fewer than 6 joints and no recognised structure: give a mask.
     """
     form = closed_form_for(robot.description)
@@ -218,17 +220,18 @@ def default_mask(robot: "KinematicArm") -> np.ndarray:
         return np.array(form.ikine_mask)
     if robot.n >= 6:
         return np.ones(6)
-    raise ValueError(
-        f"mask: robot {robot.name!r} has {robot.n} joints and no recognised structure aligned with the world axes, "
+    raise InputError(
+        f"robot {robot.name!r} has {robot.n} joints and no recognised structure aligned with the world axes, "
         f"so there is no default; "
-        f"give 6 weights on [x y z rx ry rz] that select the components to solve (at most {robot.n})"
-    )
+        f"give 6 weights on [x y z rx ry rz] that select the components to solve (at most {robot.n})",
+    parameter="mask")
 
 
 def _check_mask(mask: Sequence[float]) -> np.ndarray:
     w = np.asarray(mask, dtype=float).reshape(-1)
     if w.shape != (6,) or not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
-        raise ValueError(f"mask: expected 6 finite weights >= 0 on [x y z rx ry rz], not all 0; got {mask!r}")
+        raise InputError(f"expected 6 finite weights >= 0 on [x y z rx ry rz], not all 0; got {mask!r}",
+                         parameter="mask")
     return w
 
 

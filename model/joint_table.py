@@ -91,7 +91,7 @@ def joint_table_text(t: npt.ArrayLike, groups: Mapping[str, npt.ArrayLike], join
     for g, values in groups.items():
         arr = np.asarray(values, dtype=float)
         if arr.shape != (tt.size, len(names)):
-            raise ValueError(f"joint table: group {g!r} has shape {arr.shape}, expected {(tt.size, len(names))}")
+            raise InputError(f"expected shape {(tt.size, len(names))}, got {arr.shape}", parameter=f"group {g!r}")
         blocks.append(arr)
     data = np.column_stack([tt] + blocks) if blocks else tt[:, None]
     out = io.StringIO()

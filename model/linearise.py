@@ -35,6 +35,7 @@ from .arm import DynamicArm
 from .arrays import as_joint_vector
 from .errors import InputError
 from .plant import build_plant
+from .errors import InputError
 
 __all__ = ["linearise", "OUTPUT_KINDS"]
 
@@ -90,14 +91,15 @@ def _output_matrix(robot: DynamicArm, outputs: str | Sequence[str] | Any) -> tup
             elif kind == "qm":
                 blocks.append(np.hstack([np.diag(G), zero]))
             else:
-                raise ValueError(f"outputs: expected kinds from {OUTPUT_KINDS} or a (ny, {2 * n}) matrix, got {kind!r}")
+                raise InputError(f"expected kinds from {OUTPUT_KINDS} or a (ny, {2 * n}) matrix, got {kind!r}",
+                                 parameter="outputs")
             names += [f"{kind}[{i}]" for i in range(1, n + 1)]
         if not blocks:
-            raise ValueError("outputs: expected at least one output kind, got an empty list")
+            raise InputError("expected at least one output kind, got an empty list", parameter="outputs")
         return np.vstack(blocks), names
     C = np.atleast_2d(np.asarray(outputs, dtype=float))
     if C.ndim != 2 or C.shape[1] != 2 * n:
-        raise ValueError(f"outputs: expected a (ny, {2 * n}) output matrix, got shape {np.shape(outputs)}")
+        raise InputError(f"expected a (ny, {2 * n}) output matrix, got shape {np.shape(outputs)}", parameter="outputs")
     return C, [f"y[{i}]" for i in range(1, C.shape[0] + 1)]
 
 

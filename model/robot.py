@@ -18,6 +18,7 @@ import numpy as np
 from .arrays import as_joint_vector
 from .description import RobotDescription
 from .loading import load_description
+from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     import control
@@ -35,7 +36,7 @@ __all__ = ["Robot", "load_robot"]
 def _as_pose(T: Any) -> np.ndarray:
     arr = np.asarray(T, dtype=float)
     if arr.shape != (4, 4):
-        raise ValueError(f"T: expected a (4, 4) homogeneous transform, got shape {arr.shape}")
+        raise InputError(f"expected a (4, 4) homogeneous transform, got shape {arr.shape}", parameter="T")
     return arr
 
 
@@ -62,7 +63,7 @@ class Robot:
 
     def __init__(self, description: RobotDescription, motor_model: str = "reflected") -> None:
         if motor_model not in ("reflected", "full"):
-            raise ValueError(f"motor_model: expected 'reflected' or 'full', got {motor_model!r}")
+            raise InputError(f"expected 'reflected' or 'full', got {motor_model!r}", parameter="motor_model")
         self.description = description
         self.motor_model = motor_model
         self._parameters: "DynamicsParameters | None" = None  # None: the description's

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from .closed_form import chain_jacobian, closed_form_for, joint_values
+from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .arm import KinematicArm
@@ -44,11 +45,12 @@ def _rows(robot: "KinematicArm", q: np.ndarray, axes: Sequence[bool] | str) -> n
         if axes == "task":
             return task_jacobian(robot, q)[0]
         if axes not in AXES:
-            raise ValueError(f"axes: expected 'all', 'trans', 'rot', 'task' or 6 booleans, got {axes!r}")
+            raise InputError(f"expected 'all', 'trans', 'rot', 'task' or 6 booleans, got {axes!r}", parameter="axes")
         return robot.jacob0(q)[list(AXES[axes])]
     mask = np.asarray(axes)
     if mask.shape != (6,) or mask.dtype.kind not in "bi" or not np.all((mask == 0) | (mask == 1)) or not mask.any():
-        raise ValueError(f"axes: expected 6 booleans selecting rows of [x y z rx ry rz], at least one true; got {axes!r}")
+        raise InputError(f"expected 6 booleans selecting rows of [x y z rx ry rz], at least one true; got {axes!r}",
+                         parameter="axes")
     return robot.jacob0(q)[mask.astype(bool)]
 
 

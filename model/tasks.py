@@ -95,7 +95,8 @@ class Task:
         w.setflags(write=False)
         object.__setattr__(self, "waypoints", w)
         if len(self.labels) != w.shape[0]:
-            raise ValueError(f"labels: expected {w.shape[0]} labels, one per waypoint, got {len(self.labels)}")
+            raise InputError(f"expected {w.shape[0]} labels, one per waypoint, got {len(self.labels)}",
+                             parameter="labels")
 
     @property
     def n_segments(self) -> int:
@@ -151,11 +152,11 @@ def tour(robot: str | Path | RobotDescription, segment_time: float = 3.0) -> Tas
     """The generic task of any robot: rest -> 25 % of every joint range -> 75 % -> rest.
 
     Ranges without limits are taken as [-pi, pi] rad or [-1, 1] m (:func:`finite_limits`);
-    the rest position is clipped into the limits.
+    the rest position is the description's (:attr:`~model.description.RobotDescription.q_rest`, within the limits).
     """
     desc = _description(robot)
     lim = finite_limits(desc)
-    rest = np.clip(desc.q_rest, lim[0], lim[1])
+    rest = desc.q_rest
     a = lim[0] + 0.25 * (lim[1] - lim[0])
     b = lim[0] + 0.75 * (lim[1] - lim[0])
     return Task(name=TOUR, robot=desc.name, waypoints=np.vstack([rest, a, b, rest]),

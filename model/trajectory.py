@@ -71,12 +71,12 @@ class SampleLimitError(InputError):
 def _scalar(value: Any, name: str, *, positive: bool = False) -> float:
     """A finite float (``> 0`` if ``positive``); ValueError naming ``name`` otherwise."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
+        raise InputError(f"expected a number, got {value!r}", parameter=name)
     x = float(value)
     if not math.isfinite(x):
-        raise ValueError(f"{name}: expected a finite number, got {value!r}")
+        raise InputError(f"expected a finite number, got {value!r}", parameter=name)
     if positive and x <= 0.0:
-        raise ValueError(f"{name}: expected a value > 0, got {value!r}")
+        raise InputError(f"expected a value > 0, got {value!r}", parameter=name)
     return x
 
 
@@ -85,13 +85,13 @@ def _vector(value: Any, name: str, n: int | None = None) -> Array:
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name}: expected a vector of numbers, got {value!r}") from exc
+        raise InputError(f"expected a vector of numbers, got {value!r}", parameter=name) from exc
     if arr.ndim != 1 or arr.size == 0:
-        raise ValueError(f"{name}: expected a 1-D vector, got an array of shape {arr.shape}")
+        raise InputError(f"expected a 1-D vector, got an array of shape {arr.shape}", parameter=name)
     if n is not None and arr.shape != (n,):
-        raise ValueError(f"{name}: expected {n} values, got {arr.size}")
+        raise InputError(f"expected {n} values, got {arr.size}", parameter=name)
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: expected finite values, got {arr.tolist()}")
+        raise InputError(f"expected finite values, got {arr.tolist()}", parameter=name)
     return arr
 
 
@@ -99,7 +99,7 @@ def _times(value: Any, name: str = "t") -> Array:
     """Strictly increasing finite sample times, 1-D."""
     arr = _vector(value, name)
     if arr.size > 1 and not np.all(np.diff(arr) > 0):
-        raise ValueError(f"{name}: expected strictly increasing sample times")
+        raise InputError("expected strictly increasing sample times", parameter=name)
     return arr
 
 
@@ -127,7 +127,7 @@ def time_grid(T: float, dt: float, t0: float = 0.0) -> Array:
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         If a value is not finite or not positive, or T is not a multiple of dt.
     SampleLimitError
         If the grid would hold more than :data:`model.limits.MAX_SAMPLES` samples (checked before any is made).
@@ -141,13 +141,13 @@ def time_grid(T: float, dt: float, t0: float = 0.0) -> Array:
                                f"limit of {MAX_SAMPLES}")
     m = round(steps)
     if m < 1 or abs(steps - m) > _GRID_RTOL * max(1.0, steps):
-        raise ValueError(f"dt: T = {T!r} s is not an integer multiple of dt = {dt!r} s (T/dt = {steps!r})")
+        raise InputError(f"T = {T!r} s is not an integer multiple of dt = {dt!r} s (T/dt = {steps!r})", parameter="dt")
     return t0 + np.arange(m + 1) * dt
 
 
 def _sample_times(T: float, dt: float | None, t: Any, t0: float) -> tuple[Array, float | None]:
     if (dt is None) == (t is None):
-        raise ValueError("dt, t: give exactly one of dt (sampling period, s) or t (sample times, s), "
+        raise InputError("dt, t: give exactly one of dt (sampling period, s) or t (sample times, s), "
                          "or a sample count or a time vector in place of T")
     if t is not None:
         return _times(t), None
@@ -209,20 +209,20 @@ class JointPath:
                  qdd_start: npt.ArrayLike, qdd_end: npt.ArrayLike) -> None:
         b = _times(breaks, "breaks")
         if b.size < 2:
-            raise ValueError(f"breaks: expected at least 2 times, got {b.size}")
+            raise InputError(f"expected at least 2 times, got {b.size}", parameter="breaks")
         K = b.size - 1
         arrays = {}
         for name, value, rows in (("q", q, K + 1), ("qd", qd, K + 1), ("qdd_start", qdd_start, K), ("qdd_end", qdd_end, K)):
             arr = np.array(value, dtype=float)
             if arr.ndim != 2 or arr.shape[0] != rows:
-                raise ValueError(f"{name}: expected shape ({rows}, n), got {arr.shape}")
+                raise InputError(f"expected shape ({rows}, n), got {arr.shape}", parameter=name)
             if not np.all(np.isfinite(arr)):
-                raise ValueError(f"{name}: expected finite values")
+                raise InputError("expected finite values", parameter=name)
             arrays[name] = arr
         n = arrays["q"].shape[1]
         for name, arr in arrays.items():
             if arr.shape[1] != n:
-                raise ValueError(f"{name}: expected {n} columns like q, got {arr.shape[1]}")
+                raise InputError(f"expected {n} columns like q, got {arr.shape[1]}", parameter=name)
         self.breaks = _readonly(b)
         self.q = _readonly(arrays["q"])
         self.qd = _readonly(arrays["qd"])
@@ -290,9 +290,9 @@ class JointPath:
         """Position, velocity and acceleration at the (N,) times ``t`` (s), each of shape (N, n)."""
         tt = np.array(t, dtype=float)
         if tt.ndim != 1:
-            raise ValueError(f"t: expected a 1-D array of times, got shape {tt.shape}")
+            raise InputError(f"expected a 1-D array of times, got shape {tt.shape}", parameter="t")
         if not np.all(np.isfinite(tt)):
-            raise ValueError("t: expected finite times")
+            raise InputError("expected finite times", parameter="t")
         b = self.breaks
         k = np.clip(np.searchsorted(b, tt, side="right") - 1, 0, b.size - 2)
         h = self._h[k][:, None]
@@ -427,22 +427,23 @@ def jtraj(q0: npt.ArrayLike, qf: npt.ArrayLike, T: Any, dt: float | None = None,
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Naming the argument: shapes differ, a value is NaN/inf, ``T <= 0``,
         ``T`` not a multiple of ``dt``, a count below 2.
     """
     if qd1 is not None and qdf is not None:
-        raise ValueError("qd1, qdf: two names for the end velocity; give one")
+        raise InputError("qd1, qdf: two names for the end velocity; give one")
     qd_end = qd1 if qd1 is not None else qdf
     if dt is None and t is None:
         if isinstance(T, (int, np.integer)) and not isinstance(T, (bool, np.bool_)):
             if T < 2:
-                raise ValueError(f"T: expected a sample count >= 2 (the toolbox's form), got {T!r}")
+                raise InputError(f"expected a sample count >= 2 (the toolbox's form), got {T!r}", parameter="T")
             return jtraj(q0, qf, 1.0, t=np.linspace(0.0, 1.0, int(T)), qd0=qd0, qd1=qd_end)
         if isinstance(T, (list, tuple, np.ndarray)) and np.ndim(T) == 1:
             times = _times(T, "T")
             if times[0] < 0.0:
-                raise ValueError(f"T: expected a time vector from 0 s on (the toolbox's form), got {times[0]!r} s first")
+                raise InputError(f"expected a time vector from 0 s on (the toolbox's form), got {times[0]!r} s first",
+                                 parameter="T")
             return jtraj(q0, qf, float(times[-1]), t=times, qd0=qd0, qd1=qd_end)
     a = _vector(q0, "q0")
     n = a.size
@@ -460,18 +461,19 @@ def jtraj(q0: npt.ArrayLike, qf: npt.ArrayLike, T: Any, dt: float | None = None,
 def _trapezoid_fraction(delta: Array, T: float, cruise_fraction: float | None, v_max: Any, where: str) -> float:
     """Fraction of ``T`` spent at cruise velocity, from ``cruise_fraction`` or ``v_max``."""
     if cruise_fraction is not None and v_max is not None:
-        raise ValueError("cruise_fraction, v_max: give at most one of them")
+        raise InputError("cruise_fraction, v_max: give at most one of them")
     if v_max is None:
         c = 1.0 / 3.0 if cruise_fraction is None else _scalar(cruise_fraction, "cruise_fraction")
         if not 0.0 <= c < 1.0:
-            raise ValueError(f"cruise_fraction: expected a fraction of T in [0, 1), got {cruise_fraction!r}")
+            raise InputError(f"expected a fraction of T in [0, 1), got {cruise_fraction!r}",
+                             parameter="cruise_fraction")
         return c
     if np.ndim(v_max) == 0:
         vm = np.full(delta.shape, _scalar(v_max, "v_max", positive=True))
     else:
         vm = _vector(v_max, "v_max", delta.size)
         if np.any(vm <= 0):
-            raise ValueError(f"v_max: expected velocities > 0, got {vm.tolist()}")
+            raise InputError(f"expected velocities > 0, got {vm.tolist()}", parameter="v_max")
     moving = np.abs(delta) > 0
     if not np.any(moving):
         return 0.0
@@ -480,11 +482,11 @@ def _trapezoid_fraction(delta: Array, T: float, cruise_fraction: float | None, v
     ratio = vm[moving] * T / np.abs(delta[moving])
     j = int(np.flatnonzero(moving)[np.argmin(ratio)])
     if ratio.min() <= 1.0:
-        raise ValueError(
-            f"v_max: joint {j + 1}{where} must move {abs(delta[j]):.6g} in T = {T:.6g} s, which needs a cruise "
+        raise InputError(
+            f"joint {j + 1}{where} must move {abs(delta[j]):.6g} in T = {T:.6g} s, which needs a cruise "
             f"velocity above its mean velocity |qf - q0|/T = {abs(delta[j]) / T:.6g} (rad/s or m/s); "
-            f"got v_max = {vm[j]:.6g}"
-        )
+            f"got v_max = {vm[j]:.6g}",
+        parameter="v_max")
     return max(0.0, 2.0 / min(2.0, float(ratio.min())) - 1.0)
 
 
@@ -543,7 +545,7 @@ def trapezoidal(q0: npt.ArrayLike, qf: npt.ArrayLike, T: float, dt: float | None
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Naming the argument: shapes, NaN/inf, ``T <= 0``, a fraction outside
         [0, 1), an infeasible ``v_max`` (naming the joint and the least velocity).
     """
@@ -600,47 +602,55 @@ def via_points(points: npt.ArrayLike, segment_times: float | npt.ArrayLike, dt: 
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Naming the argument and value.
     """
     P = np.array(points, dtype=float)
     if P.ndim != 2 or P.shape[0] < 2:
-        raise ValueError(f"points: expected a (K+1, n) array with at least 2 rows, got shape {P.shape}")
+        raise InputError(f"expected a (K+1, n) array with at least 2 rows, got shape {P.shape}", parameter="points")
     if not np.all(np.isfinite(P)):
         bad = np.argwhere(~np.isfinite(P))[0]
-        raise ValueError(f"points: row {bad[0] + 1}, joint {bad[1] + 1}: expected a finite value, got {float(P[tuple(bad)])!r}")
+        raise InputError(f"row {bad[0] + 1}, joint {bad[1] + 1}: expected a finite value, got {float(P[tuple(bad)])!r}",
+                         parameter="points")
     K, n = P.shape[0] - 1, P.shape[1]
     if np.ndim(segment_times) == 0:
         durations = np.full(K, _scalar(segment_times, "segment_times", positive=True))
     else:
         durations = _vector(segment_times, "segment_times", K)
         if np.any(durations <= 0):
-            raise ValueError(f"segment_times: expected durations > 0 s, got {durations.tolist()}")
+            raise InputError(f"expected durations > 0 s, got {durations.tolist()}", parameter="segment_times")
     t0 = _scalar(t0, "t0")
     if profile not in ("quintic", "trapezoidal"):
-        raise ValueError(f"profile: expected 'quintic' or 'trapezoidal', got {profile!r}")
+        raise InputError(f"expected 'quintic' or 'trapezoidal', got {profile!r}", parameter="profile")
     if isinstance(via_velocities, str):
         if via_velocities == "stop":
             V = np.zeros((K + 1, n))
         elif via_velocities == "heuristic":
             V = np.vstack([np.zeros(n), _heuristic_via_velocities(P, durations), np.zeros(n)])
         else:
-            raise ValueError(f"via_velocities: expected 'stop', 'heuristic' or a ({K - 1}, {n}) array, got {via_velocities!r}")
+            raise InputError(f"expected 'stop', 'heuristic' or a ({K - 1}, {n}) array, got {via_velocities!r}",
+                             parameter="via_velocities")
     else:
         inner = np.array(via_velocities, dtype=float)
         if inner.shape != (K - 1, n) or not np.all(np.isfinite(inner)):
-            raise ValueError(f"via_velocities: expected a finite ({K - 1}, {n}) array, got shape {inner.shape}")
+            raise InputError(f"expected a finite ({K - 1}, {n}) array, got shape {inner.shape}",
+                             parameter="via_velocities")
         V = np.vstack([np.zeros(n), inner, np.zeros(n)])
     if profile == "trapezoidal" and np.any(V != 0.0):
-        raise ValueError(f"via_velocities: profile 'trapezoidal' stops at every via point; got {via_velocities!r}")
+        raise InputError(f"profile 'trapezoidal' stops at every via point; got {via_velocities!r}",
+                         parameter="via_velocities")
 
     # Segment boundaries: t0 plus an exact (fsum) partial sum of the durations.
+    if not math.isfinite(t0 + sum(durations.tolist())):  # a Python sum: inf on overflow, without a warning
+        raise InputError(f"the {K} segments of {durations.max():g} s at most last longer than any finite time",
+                         parameter="segment_times")
     t_via = np.array([t0 + math.fsum(durations[:k]) for k in range(K + 1)])
     if dt is not None:
         step = _scalar(dt, "dt", positive=True)
         for k, d in enumerate(durations.tolist()):
             if abs(d / step - round(d / step)) > _GRID_RTOL * max(1.0, d / step):
-                raise ValueError(f"segment_times: segment {k + 1} lasts {d!r} s, not a multiple of dt = {step!r} s")
+                raise InputError(f"segment {k + 1} lasts {d!r} s, not a multiple of dt = {step!r} s",
+                                 parameter="segment_times")
     times, step = _sample_times(float(t_via[-1] - t0), dt, t, t0)
 
     if profile == "quintic":
@@ -674,7 +684,7 @@ def _time_law(T: float, t0: float, profile: str) -> JointPath:
     if profile == "trapezoidal":
         offsets, q, qd, acc0, acc1 = _trapezoid_pieces(np.zeros(1), np.ones(1), T, 1.0 / 3.0)
         return JointPath(t0 + np.array(offsets), q, qd, acc0, acc1)
-    raise ValueError(f"profile: expected 'quintic', 'trapezoidal' or 'linear', got {profile!r}")
+    raise InputError(f"expected 'quintic', 'trapezoidal' or 'linear', got {profile!r}", parameter="profile")
 
 
 class StraightLine:
@@ -740,13 +750,14 @@ def straight_line(p0: npt.ArrayLike, pf: npt.ArrayLike, T: float, t0: float = 0.
 def _as_pose(value: Any, name: str) -> Array:
     T = np.array(value, dtype=float)
     if T.shape != (4, 4):
-        raise ValueError(f"{name}: expected a (4, 4) homogeneous transform, got shape {T.shape}")
+        raise InputError(f"expected a (4, 4) homogeneous transform, got shape {T.shape}", parameter=name)
     if not np.all(np.isfinite(T)):
-        raise ValueError(f"{name}: expected finite values")
+        raise InputError("expected finite values", parameter=name)
     R = T[:3, :3]
     if (np.abs(T[3] - [0.0, 0.0, 0.0, 1.0]).max() > _POSE_TOL
             or np.abs(R.T @ R - np.eye(3)).max() > _POSE_TOL or np.linalg.det(R) < 0):
-        raise ValueError(f"{name}: expected a rigid transform (orthonormal rotation, det +1, last row [0, 0, 0, 1])")
+        raise InputError("expected a rigid transform (orthonormal rotation, det +1, last row [0, 0, 0, 1])",
+                         parameter=name)
     return T
 
 
@@ -865,7 +876,7 @@ def ctraj(T0: npt.ArrayLike, T1: npt.ArrayLike, T: float, dt: float | None = Non
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         A pose is not a rigid transform, or as in :func:`jtraj`.
     """
     path = CartesianPath(T0, T1, T, t0, profile)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
-import warnings
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -31,7 +31,8 @@ from xml.etree.ElementTree import ParseError
 
 import numpy as np
 
-from .description import RobotDescription, RobotDescriptionError, _check_keys, _description, _link, _Where
+from .description import (FROM_DEFAULT, FROM_FILE, FROM_URDF, RobotDescription, RobotDescriptionError, _check_keys,
+                          _description, _link, _Where)
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
 from .limits import read_bounded
@@ -40,7 +41,7 @@ __all__ = [
     "MAX_URDF_BYTES",
     "MAX_MOVING_JOINTS",
     "MOTOR_KEYS",
-    "URDFDynamicsIgnoredWarning",
+    "NO_LIMIT",
     "UrdfChain",
     "ChainJoint",
     "read_urdf",
@@ -50,7 +51,11 @@ __all__ = [
 ]
 
 #: The keys a ``[joints.NAME]`` table may hold: the motor keys of a ``[[links]]`` table, and its source.
-MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source")
+MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "velocity_limit",
+              "rotor_mass", "source")
+#: A ``<limit velocity>`` at or above this is "no limit": the value :mod:`model.urdf_export` writes for a joint whose
+#: description states none (URDF requires the attribute and a finite number).
+NO_LIMIT = sys.float_info.max
 _MOVING = ("revolute", "continuous", "prismatic")
 _REFUSED = {
     "floating": "a floating joint (6 degrees of freedom) is not a serial-arm joint",
@@ -61,17 +66,15 @@ _TOML_KEYS = ("name", "urdf", "base_link", "tip_link", "joints", "gravity", "res
 _PASSED_ON = ("name", "gravity", "rest", "description", "source", "units", "tasks", "base", "tool")
 
 
-class URDFDynamicsIgnoredWarning(UserWarning):
-    """A URDF joint's ``<dynamics damping friction>`` is not used: friction comes from ``[joints.*]``."""
-
-
 @dataclass(frozen=True)
 class ChainJoint:
     """One moving joint of the chain with the rigid body it moves (URDF joint frame and link frame).
 
     ``origin`` (4, 4) is the joint frame in the previous moving link's frame (fixed joints merged);
     ``axis`` the unit axis in the joint frame; ``mass`` (kg), ``com`` (m) and ``inertia`` (3, 3, kg m^2,
-    about the com) are the lumped body in the child link frame.
+    about the com) are the lumped body in the child link frame; ``damping`` (N m s/rad or N s/m) and
+    ``friction`` (N m or N) the joint-side ``<dynamics>``, ``velocity`` the ``<limit velocity>`` (rad/s or
+    m/s; None: not stated, or 0, or :data:`NO_LIMIT`).
     """
 
     name: str
@@ -82,7 +85,9 @@ class ChainJoint:
     mass: float
     com: np.ndarray
     inertia: np.ndarray
-    ignored_dynamics: bool
+    damping: float = 0.0
+    friction: float = 0.0
+    velocity: float | None = None
 
 
 @dataclass(frozen=True)
@@ -187,18 +192,37 @@ def _limit(path: Path, joint: Any) -> tuple[float, float] | None:
     return None if lo == hi else (lo, hi)
 
 
-def _ignored_dynamics(path: Path, joint: Any) -> bool:
+def _dynamics(path: Path, joint: Any) -> tuple[float, float]:
+    """The joint-side ``<dynamics damping friction>`` (0 where absent), each finite and >= 0."""
     dyn = joint.dynamics
     if dyn is None:
-        return False
+        return 0.0, 0.0
     values = []
     for name in ("damping", "friction"):
         raw = getattr(dyn, name)
         try:
-            values.append(0.0 if raw is None else float(raw))
-        except ValueError:
-            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: <dynamics {name}={raw!r}>: expected a number") from None
-    return any(v != 0.0 for v in values)
+            value = 0.0 if raw is None else float(raw)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not (math.isfinite(value) and value >= 0):
+            raise RobotDescriptionError(f"{path}, joint {joint.name!r}: <dynamics {name}={raw!r}>: expected a finite "
+                                        "number >= 0")
+        values.append(value + 0.0)
+    return values[0], values[1]
+
+
+def _velocity(path: Path, joint: Any) -> float | None:
+    """The ``<limit velocity>`` (rad/s or m/s); None where absent, 0 (a common "not given") or :data:`NO_LIMIT`."""
+    raw = None if joint.limit is None else joint.limit.velocity
+    if raw is None:
+        return None
+    try:
+        value = float(raw)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not (value >= 0 and not math.isnan(value)):
+        raise RobotDescriptionError(f"{path}, joint {joint.name!r}: <limit velocity={raw!r}>: expected a number >= 0")
+    return None if value == 0 or value >= NO_LIMIT else value
 
 
 def _listing(names: Sequence[str], limit: int = 20) -> str:
@@ -327,7 +351,8 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
         spec = dict(name=joint.name, joint="prismatic" if joint.type == "prismatic" else "revolute", origin=T,
                     axis=checked(_unit_axis, np.array([0.0, 0.0, 1.0]), path, joint),
                     qlim=checked(_limit, None, path, joint),
-                    ignored_dynamics=checked(_ignored_dynamics, False, path, joint))
+                    **dict(zip(("damping", "friction"), checked(_dynamics, (0.0, 0.0), path, joint))),
+                    velocity=checked(_velocity, None, path, joint))
         pending = np.eye(4)
         bodies = hanging(joint.child, np.eye(4))
     close_link()
@@ -367,6 +392,28 @@ class _JointWhere(_Where):
 
 def _pose16(T: np.ndarray) -> tuple[float, ...] | None:
     return None if np.array_equal(T, np.eye(4)) else tuple(float(v) for v in np.asarray(T).ravel())
+
+
+def _urdf_motor_fields(cj: ChainJoint, table: Mapping[str, Any]) -> dict[str, Any]:
+    """The URDF's joint-side friction and velocity limit as robot-file fields (motor side, through the gear ratio).
+
+    ``<dynamics damping>`` D becomes ``viscous_friction = D / G^2`` and ``friction`` F ``coulomb_friction =
+    F / |G|`` (both directions), so that the model's joint friction ``G^2 B qd + |G| Tc sign(qd)`` is the URDF's;
+    a key the robot file states for the joint wins. ``G^2`` is the product ``G * G`` the model reflects with, and
+    the quotient is correctly rounded, so reflecting it back gives D to the last bit, or its neighbouring double
+    where no motor-side double reflects to D exactly (one unit in the last place: 2.2e-16 relative at most).
+    A gear ratio the file states wrongly is reported by the link check; the conversion then uses 1.
+    """
+    g = table.get("gear_ratio", 1.0)
+    G = float(g) if isinstance(g, (int, float)) and not isinstance(g, bool) and math.isfinite(g) and g != 0 else 1.0
+    out: dict[str, Any] = {}
+    if cj.damping:
+        out["viscous_friction"] = cj.damping / (G * G)
+    if cj.friction:
+        out["coulomb_friction"] = cj.friction / abs(G)
+    if cj.velocity is not None:
+        out["velocity_limit"] = cj.velocity
+    return out
 
 
 def description_from_urdf(urdf_path: str | Path, data: Mapping[str, Any] | None = None,
@@ -430,26 +477,25 @@ def _urdf_description(w: _Where, urdf_path: Path, data: dict[str, Any]) -> Robot
             _check_keys(w, None, table, (), MOTOR_KEYS, prefix=f"joints.{name}.", what="one of the motor keys")
             if len(w.problems) == start:
                 good_motors[name] = table
-    silent = [j.name for j in chain.joints if j.ignored_dynamics and j.name not in motors]
-    if silent:
-        warnings.warn(f"{urdf_path}: <dynamics damping friction> of joint(s) {', '.join(silent)} ignored: friction "
-                      "comes from [joints.NAME] in a robot TOML file", URDFDynamicsIgnoredWarning, stacklevel=4)
     jw = _JointWhere(w.path, names, w.problems)
     links = []
     for i, cj in enumerate(chain.joints):
         ixx, iyy, izz, ixy, iyz, ixz = (cj.inertia[0, 0], cj.inertia[1, 1], cj.inertia[2, 2], cj.inertia[0, 1],
                                         cj.inertia[1, 2], cj.inertia[0, 2])
+        table = good_motors.get(cj.name, {})
         fields: dict[str, Any] = {
             "joint": cj.joint, "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0, "name": cj.name,
             "mass": cj.mass, "com": [float(v) for v in cj.com], "inertia": [float(v) for v in (ixx, iyy, izz, ixy, iyz, ixz)],
-            **good_motors.get(cj.name, {}),
+            **_urdf_motor_fields(cj, table), **table,
         }
         if cj.qlim is not None:
             fields["qlim"] = list(cj.qlim)
         link = _link(jw, i, fields)
         if link is not None:
+            sources = tuple(FROM_FILE if key in table else FROM_URDF if value else FROM_DEFAULT
+                            for key, value in (("viscous_friction", cj.damping), ("coulomb_friction", cj.friction)))
             links.append(dataclasses.replace(link, origin=tuple(float(v) for v in cj.origin.ravel()),
-                                             axis=tuple(float(v) for v in cj.axis)))
+                                             axis=tuple(float(v) for v in cj.axis), friction_source=sources))
     # Top-level keys (gravity, rest, tool, tasks, ...) are checked by the TOML reader on a DH skeleton of
     # the same joints; its links are then replaced by the URDF ones.
     skeleton = {key: data[key] for key in _PASSED_ON if key in data}

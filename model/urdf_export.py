@@ -5,10 +5,15 @@ unit axes, bodies in the moved joint frames): each joint becomes a URDF joint wi
 placement as ``<origin>`` and that axis (flip applied), each body a link ``<inertial>``.
 ``base`` becomes a fixed joint from a ``world`` link, the tip and the tool fixed joints to
 the leaves ``flange`` and ``tool``. Joint limits become ``<limit>`` (a revolute joint without limits is
-``continuous``, a prismatic one gets lower = upper = 0, which reads back as no limit).
+``continuous``, a prismatic one gets lower = upper = 0, which reads back as no limit): ``effort`` is the
+joint-side torque (or force) limit ``|G| torque_limit``, ``velocity`` the ``velocity_limit``; URDF requires
+both, finite, so a limit the description does not state is written as :data:`~model.urdf.NO_LIMIT` (the
+largest double), which :mod:`model.urdf` reads back as none. The URDF's ``<dynamics damping friction>``
+are the joint-side friction ``G^2 B`` and ``|G| Tc`` (symmetric Coulomb friction only: URDF has one value).
 
-URDF has no place for motor data or gravity: :func:`companion_toml` writes the robot
-TOML that points at the URDF and restores them, so that URDF + TOML is the same model.
+URDF has no place for motor data, gravity or the description's text: :func:`companion_toml` writes
+the robot TOML that points at the URDF and restores them (``description`` and ``source`` also go into
+an XML comment of the URDF), so that URDF + TOML is the same model.
 """
 
 from __future__ import annotations
@@ -20,9 +25,10 @@ from pathlib import Path
 import numpy as np
 
 from .chain import build_chain
-from .description import RobotDescription
+from .description import LinkDescription, RobotDescription
 from .errors import InputError
 from .files import write_atomic
+from .urdf import NO_LIMIT
 
 __all__ = ["urdf_text", "companion_toml", "export_urdf"]
 
@@ -31,7 +37,7 @@ def urdf_text(desc: RobotDescription) -> str:
     """The URDF XML of ``desc``: links ``base_link``, ``link1``..``linkN``, ``flange`` (the tip), ``tool``
     if the description has one, ``world`` if it has a base pose; inertials and limits included."""
     from lxml import etree
-    from yourdfpy import URDF, Inertial, Joint, Limit, Link, Robot
+    from yourdfpy import URDF, Dynamics, Inertial, Joint, Limit, Link, Robot
 
     chain = build_chain(desc)
     links = [Link(name="base_link")]
@@ -45,15 +51,17 @@ def urdf_text(desc: RobotDescription) -> str:
         com = np.eye(4)
         com[:3, 3] = chain.com[i]
         links.append(Link(name=child, inertial=Inertial(origin=com, mass=float(chain.mass[i]), inertia=chain.inertia[i])))
-        effort = 0.0 if link.torque_limit is None else abs(link.gear_ratio) * link.torque_limit
+        effort = NO_LIMIT if link.torque_limit is None else abs(link.gear_ratio) * link.torque_limit
+        velocity = NO_LIMIT if link.velocity_limit is None else link.velocity_limit
         if link.qlim is not None:
-            kind, limit = link.joint, Limit(effort=effort, velocity=0.0, lower=link.qlim[0], upper=link.qlim[1])
+            kind, limit = link.joint, Limit(effort=effort, velocity=velocity, lower=link.qlim[0], upper=link.qlim[1])
         elif link.is_revolute:
-            kind, limit = "continuous", None
+            stated = link.torque_limit is not None or link.velocity_limit is not None
+            kind, limit = "continuous", Limit(effort=effort, velocity=velocity) if stated else None
         else:
-            kind, limit = "prismatic", Limit(effort=effort, velocity=0.0, lower=0.0, upper=0.0)
+            kind, limit = "prismatic", Limit(effort=effort, velocity=velocity, lower=0.0, upper=0.0)
         joints.append(Joint(name=name, type=kind, parent=parent, child=child, origin=chain.placements[i],
-                            axis=chain.axes[i], limit=limit))
+                            axis=chain.axes[i], limit=limit, dynamics=_dynamics(link, Dynamics)))
         parent = child
     links.append(Link(name="flange"))
     joints.append(Joint(name="flange_joint", type="fixed", parent=parent, child="flange", origin=chain.tip))
@@ -62,7 +70,19 @@ def urdf_text(desc: RobotDescription) -> str:
         joints.append(Joint(name="tool_joint", type="fixed", parent="flange", child="tool", origin=chain.tool))
     robot = Robot(name=desc.name, links=links, joints=joints)
     urdf = URDF(robot=robot, build_scene_graph=False, load_meshes=False)
-    return etree.tostring(urdf.write_xml(), pretty_print=True, xml_declaration=True, encoding="UTF-8").decode()
+    root = urdf.write_xml().getroot()
+    for key, text in (("source", desc.source), ("description", desc.description)):
+        if text:  # for the reader; the companion TOML carries them back (an XML comment cannot hold "--")
+            root.insert(0, etree.Comment(f" {key}: {text.replace('--', '- -')} "))
+    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="UTF-8").decode()
+
+
+def _dynamics(link: LinkDescription, Dynamics: type) -> object | None:
+    """The joint-side ``<dynamics damping friction>`` of ``link`` (None when both are 0), from its motor-side
+    friction: ``G^2 B`` and ``|G| Tc`` (URDF holds one Coulomb value: ``Tc+``; an asymmetric pair is kept by the TOML)."""
+    G = link.gear_ratio
+    damping, friction = G * G * link.viscous_friction, abs(G) * link.coulomb_friction[0]
+    return Dynamics(damping=damping, friction=friction) if damping or friction else None
 
 
 def _toml_number(x: float) -> str:
@@ -76,6 +96,8 @@ def companion_toml(desc: RobotDescription, urdf_name: str) -> str:
     lines = [f"# {desc.name} as URDF ({urdf_name}) plus what URDF cannot hold: gravity, rest pose and motor data.",
              "# Written by manip export-urdf. SI units: m, rad, kg, kg m^2, N m s/rad, N m (motor side).",
              f"name = {json.dumps(desc.name)}",
+             *([f"description = {json.dumps(desc.description)}"] if desc.description else []),
+             *([f"source = {json.dumps(desc.source)}"] if desc.source else []),
              f"urdf = {json.dumps(urdf_name)}",
              f"tip_link = {json.dumps('tool' if desc.tool is not None else 'flange')}",
              f"gravity = [{', '.join(_toml_number(g) for g in desc.gravity)}]"]

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .tasks import finite_limits
+from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .arm import KinematicArm
@@ -141,7 +142,7 @@ def envelope(points: np.ndarray, axes: tuple[str, str], cells: int = 160, closin
     from scipy import ndimage
 
     if cells < 8 or closing < 0:
-        raise ValueError(f"cells: expected >= 8 and closing >= 0, got {cells} and {closing}")
+        raise InputError(f"expected >= 8 and closing >= 0, got {cells} and {closing}", parameter="cells")
     lo, hi = points.min(axis=0), points.max(axis=0)
     span = float(max(hi - lo)) or 1e-3
     size = span / cells
@@ -184,13 +185,13 @@ def reachable_workspace(robot: "KinematicArm", samples: int = 200_000, seed: int
         (see the module docstring).
     """
     if samples < 100:
-        raise ValueError(f"samples: expected at least 100, got {samples}")
+        raise InputError(f"expected at least 100, got {samples}", parameter="samples")
     desc = robot.description
     lim = finite_limits(desc)
     rng = np.random.default_rng(seed)
     q = lim[0] + rng.random((samples, robot.n)) * (lim[1] - lim[0])
     p = _tool_points(robot, q)
-    frames0 = robot.fkine_all(np.clip(desc.q_rest, lim[0], lim[1]))
+    frames0 = robot.fkine_all(desc.q_rest)
     base = frames0[0][:3, 3].copy()
     r = np.hypot(p[:, 0] - base[0], p[:, 1] - base[1])
     first = desc.links[0]

@@ -17,6 +17,7 @@ from matplotlib.ticker import MaxNLocator
 
 from model.files import atomic_path
 from model.robot import Robot
+from model.errors import InputError
 
 __all__ = ["plot_arm", "animate_arm"]
 
@@ -88,7 +89,7 @@ def animate_arm(
     Q = np.asarray(Q, dtype=float)
     t = np.asarray(t, dtype=float)
     if Q.ndim != 2 or Q.shape[1] != robot.n or t.shape != (Q.shape[0],):
-        raise ValueError(f"Q, t: expected shapes (N, {robot.n}) and (N,), got {Q.shape} and {t.shape}")
+        raise InputError(f"Q, t: expected shapes (N, {robot.n}) and (N,), got {Q.shape} and {t.shape}")
     idx = np.unique(np.linspace(0, len(t) - 1, min(max_frames, len(t))).round().astype(int))
     frames = _frames(robot, Q[idx])
     origins = frames[:, :, 0:3, 3]

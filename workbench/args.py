@@ -11,14 +11,15 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import socket
 
-from model.errors import InputError
+from model.errors import InputError, WorkbenchError
 
-__all__ = ["UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
-           "in_flag_terms", "positive_float"]
+__all__ = ["ArgumentsError", "OneLineParser", "UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
+           "host_address", "in_flag_terms", "positive_float", "scheduler_address"]
 
-#: The library's parameter names that its error messages start with (``"link_mass_scale: expected ..."``)
-#: and the flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
+#: The library's parameter names (the ``parameter`` field of :class:`model.errors.WorkbenchError`) and the
+#: flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
 FLAG_OF: dict[str, str] = {
     "bandwidth": "--bandwidth",
     "damping": "--damping",
@@ -36,11 +37,30 @@ FLAG_OF: dict[str, str] = {
     "t_end": "--horizon",
     "step": "--step",
     "motor_model": "--motor-model",
+    "samples": "--samples",
+    "seed": "--seed",
+    "scheduler": "--scheduler",
 }
-_LEADING_NAME = re.compile(r"^([A-Za-z_]\w*):")
+_FLAG = re.compile(r"--([\w-]+)")
+
 
 class UsageError(InputError):
     """Bad command-line input (a flag's value, an output path); printed as one line, exit status 2."""
+
+
+class ArgumentsError(UsageError):
+    """argparse refused the command line (an unknown flag, a value of the wrong type); ``prog`` is the command."""
+
+    def __init__(self, message: str, prog: str = "manip") -> None:
+        super().__init__(message)
+        self.prog = prog
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` whose refusal is an :class:`ArgumentsError` (one line), not usage + exit."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise ArgumentsError(message, self.prog)
 
 
 def controller_kind(value: str) -> str:
@@ -53,20 +73,18 @@ def controller_kind(value: str) -> str:
     return value
 
 
-def in_flag_terms(message: str, args: argparse.Namespace) -> str:
-    """``message`` with a leading library parameter name (:data:`FLAG_OF`) replaced by the flag of the command.
+def in_flag_terms(exc: WorkbenchError, args: argparse.Namespace) -> str:
+    """The message of ``exc`` with the parameter it concerns named by the flag of the running command.
 
-    Only a flag that the running command has is put in (``args`` holds its options), so
-    ``"t_end: ..."`` from ``manip validate-fmu`` reads ``"--horizon: ..."`` and a name no flag sets stays.
+    ``exc.parameter`` is looked up in :data:`FLAG_OF`; only a flag that the running command has is put
+    in (``args`` holds its options), so ``t_end`` from ``manip validate-fmu`` reads ``--horizon`` and a
+    parameter no flag of the command sets keeps its library name (``str(exc)``).
     """
-    match = _LEADING_NAME.match(message)
-    if match is None or match.group(1) not in FLAG_OF:
-        return message
-    flag = FLAG_OF[match.group(1)]
-    option = re.search(r"--([\w-]+)", flag)
+    flag = FLAG_OF.get(exc.parameter or "")
+    option = None if flag is None else _FLAG.search(flag)
     if option is None or not hasattr(args, option.group(1).replace("-", "_")):
-        return message
-    return flag + message[match.end(1):]
+        return str(exc)
+    return f"{flag}: {exc.detail}"
 
 
 def finite_or_fail(value: float | None, flag: str, positive: bool = True) -> None:
@@ -103,6 +121,37 @@ def bounded_int(lo: int, hi: int, what: str):
         return value
 
     return parse
+
+
+def host_address(text: str) -> str:
+    """argparse type: a host name or address this machine resolves (``127.0.0.1``, ``::1``, ``localhost``)."""
+    if not text.strip() or any(c.isspace() or c == "\0" for c in text):
+        raise argparse.ArgumentTypeError(f"expected a host name or address, got {text!r}")
+    try:
+        socket.getaddrinfo(text, None)
+    except (OSError, UnicodeError, ValueError) as exc:  # socket.gaierror is an OSError
+        raise argparse.ArgumentTypeError(f"{text!r} is not a host name or address this machine resolves "
+                                         f"({getattr(exc, 'strerror', None) or exc})") from None
+    return text
+
+
+def scheduler_address(text: str) -> str:
+    """argparse type: a Dask scheduler address, ``tcp://HOST:PORT`` (the protocol defaults to tcp), host resolved."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    expected = f"expected a scheduler address tcp://HOST:PORT, got {text!r}"
+    if not text.strip() or any(c.isspace() or c == "\0" for c in text):
+        raise argparse.ArgumentTypeError(expected)
+    try:
+        scheme, location = parse_address(text)
+        host, port = parse_host_port(location, 8786) if scheme in ("tcp", "tls", "ws", "wss") else ("-", 1)
+    except (ValueError, TypeError):
+        raise argparse.ArgumentTypeError(expected) from None
+    if not (host and 1 <= int(port) <= 65535):
+        raise argparse.ArgumentTypeError(expected)
+    if host != "-":
+        host_address(host)  # its own message: the host does not resolve
+    return text
 
 
 def add_spec_args(p: argparse.ArgumentParser) -> None:

@@ -4,8 +4,9 @@ The sub-commands live in ``workbench/cmd_*.py`` (``register(subparsers)`` each);
 this module assembles them and owns the outcome: an expected error
 (:class:`model.errors.WorkbenchError`) is printed as one line with exit status
 2 (an input error with several problems as a count line and one line per
-problem), a library parameter name at its start replaced by the flag the user
-typed (:data:`workbench.args.FLAG_OF`); Ctrl-C as one line with exit status
+problem), the library parameter it concerns (its ``parameter`` field) named by
+the flag the user typed (:data:`workbench.args.FLAG_OF`); a value argparse
+refuses as one line too (exit status 2); Ctrl-C as one line with exit status
 130; anything else is a bug and keeps its traceback.
 """
 
@@ -22,7 +23,7 @@ from model.errors import InputError, WorkbenchError
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_sweep, cmd_track
 from . import cmd_teach, cmd_workspace  # teach page and workspace figure
-from .args import UsageError, add_no_plots, in_flag_terms
+from .args import ArgumentsError, OneLineParser, UsageError, add_no_plots, in_flag_terms
 from .outputs import check_out_dir
 
 __all__ = ["main", "build_parser", "one_line", "error_lines", "UsageError", "EXIT_USAGE", "EXIT_INTERRUPTED", "EXIT_BROKEN_PIPE",
@@ -62,7 +63,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     The design arguments read control_design's defaults (python-control); ``only``
     keeps ``manip robots`` and ``manip info`` from importing it.
     """
-    parser = argparse.ArgumentParser(prog="manip", description="Model, control and export robot manipulators.")
+    parser = OneLineParser(prog="manip", description="Model, control and export robot manipulators.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     cmd_model.register(sub)
@@ -98,16 +99,22 @@ def one_line(exc: BaseException, limit: int = 400) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def error_lines(exc: WorkbenchError) -> list[str]:
+def error_lines(exc: WorkbenchError, args: argparse.Namespace | None = None) -> list[str]:
     """The lines an expected error prints: :func:`one_line` of it, or with several problems
-    (:attr:`model.errors.InputError.problems`) a count line and one complete line per problem."""
+    (:attr:`model.errors.InputError.problems`) a count line and one complete line per problem.
+
+    With ``args`` (the running command's options), the parameter the error concerns
+    (:attr:`~model.errors.WorkbenchError.parameter`) is named by the flag the user typed
+    (:func:`~workbench.args.in_flag_terms`).
+    """
+    text = in_flag_terms(exc, args) if args is not None else str(exc)
     if not isinstance(exc, InputError):
-        return [one_line(exc)]
+        return [one_line(Exception(text))]
     # an input error is one line per problem, each a whole message: a longer limit keeps the list of
     # known keys and the "did you mean" after it (the default limit is for compiler output)
     problems, limit = exc.problems, 1000
     if len(problems) == 1:
-        return [one_line(exc, limit)]
+        return [one_line(Exception(text), limit)]
     lines = [one_line(Exception(str(exc).splitlines()[0]), limit)]
     lines += [one_line(Exception(p), limit) for p in problems[:MAX_PROBLEM_LINES]]
     if len(problems) > MAX_PROBLEM_LINES:
@@ -123,14 +130,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``manip`` console command; returns the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((a for a in argv if not a.startswith("-")), None)
-    args = build_parser(only=command).parse_args(argv)
+    try:
+        args = build_parser(only=command).parse_args(argv)
+    except ArgumentsError as exc:  # argparse's refusal, as one line (its usage is behind --help)
+        print(f"{exc.prog}: error: {exc.detail} (see {exc.prog} --help)", file=sys.stderr)
+        return EXIT_USAGE
     previous = warnings.formatwarning
     warnings.formatwarning = _one_line_warning
     try:
         return int(args.func(args) or 0)
     except WorkbenchError as exc:
-        for line in error_lines(exc):
-            print(f"manip {args.command}: error: {in_flag_terms(line, args)}", file=sys.stderr)
+        for line in error_lines(exc, args):
+            print(f"manip {args.command}: error: {line}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"manip {args.command}: interrupted", file=sys.stderr)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .args import positive_float
+from .args import UsageError, positive_float
 from .outputs import out_file
 
 __all__ = ["register"]
@@ -30,12 +30,16 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from fmu.cross import buildable_platforms
     from fmu.platforms import resolve_platforms
 
+    target = out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
+    if target.suffix != ".fmu":
+        raise UsageError(f"--output: expected a file name ending in .fmu, got {args.output!r}")
     why = ""
+    if args.platforms is not None and not args.platforms.replace(",", "").strip():
+        raise UsageError(f"--platforms: expected a comma list of platform names (or host), got {args.platforms!r}")
     if args.platforms is None:  # everything the toolchain builds; the host's alone says why (after the work,
         platforms, why = buildable_platforms()  # so that a bad input still gives one line)
     else:
         platforms = resolve_platforms(args.platforms, flag="--platforms")
-    out_file(args.output, "--output", create=False)  # export_fmu makes the folder once the FMU is built
     path = export_fmu(args.robot, args.output, step=args.step, motor_model=args.motor_model,
                       fmi_version=args.fmi_version, platforms=platforms, progress=_say)
     if why:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .args import UsageError, add_no_plots
+from .args import UsageError, add_no_plots, host_address, scheduler_address
 from .outputs import check_out_dir
 
 __all__ = ["register", "run_sweep"]
@@ -58,9 +58,9 @@ def register(subparsers: Any, full: bool = True) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--workers", type=int, default=None, metavar="K",
                    help="worker processes of the embedded cluster (default: the machine's cores)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+    p.add_argument("--scheduler", type=scheduler_address, default=None, metavar="ADDRESS",
                    help="run on an existing Dask cluster (tcp://host:port) instead of an embedded one")
-    p.add_argument("--listen", default="127.0.0.1", metavar="HOST",
+    p.add_argument("--listen", type=host_address, default="127.0.0.1", metavar="HOST",
                    help="interface of the embedded cluster (default 127.0.0.1; another one is reachable from the "
                         "network and warns)")
     p.add_argument("--resume", action="store_true", help="keep the cases an interrupted run of this spec wrote in DIR")

@@ -18,7 +18,7 @@ import threading
 import warnings
 from typing import Any
 
-from .args import bounded_int
+from .args import bounded_int, host_address
 
 __all__ = ["register", "run_teach"]
 
@@ -78,7 +78,7 @@ def register(subparsers: Any) -> None:
     p = subparsers.add_parser("teach", help="drive the arm in a browser: joint sliders, tool pose, IK target, playback")
     p.add_argument("robot", help="built-in name, TOML or URDF file")
     p.add_argument("--port", type=bounded_int(1, 65535, "a port number"), default=None, metavar="N", help="port to serve on (default: a free one)")
-    p.add_argument("--host", default="127.0.0.1", metavar="ADDR",
+    p.add_argument("--host", type=host_address, default="127.0.0.1", metavar="ADDR",
                    help="address to bind (default 127.0.0.1; anything else is reachable from other machines)")
     p.add_argument("--no-browser", action="store_true", help="print the address only, do not open a browser")
     p.add_argument("--result", default=None, metavar="DIR",

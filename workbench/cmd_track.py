@@ -16,7 +16,7 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 from .args import add_no_plots, add_spec_args, controller_kind, finite_or_fail
 from .formatting import format_table, saturation_warnings
@@ -44,6 +44,19 @@ def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "",
     return [save_figure(fig, out / f"{prefix}{name}.png") for name, fig in figures]
 
 
+def _noted(progress: Callable[[float, float, float], None], note: str) -> Callable[[float, float, float], None]:
+    """``progress`` that first prints ``note`` on stderr, at its first call (when the simulation starts)."""
+    said = []
+
+    def report(fraction: float, t: float, t_final: float) -> None:
+        if not said:
+            print(note, file=sys.stderr, flush=True)
+            said.append(True)
+        progress(fraction, t, t_final)
+
+    return report
+
+
 def run_track(args: argparse.Namespace) -> int:
     """``manip track``: simulate the closed loop along a task, write metrics.json and plots."""
     from closed_loop.progress import ProgressLine
@@ -51,7 +64,7 @@ def run_track(args: argparse.Namespace) -> int:
     from control_design.computed_torque import ModelMismatch, plant_with_mismatch
     from control_design.design import design_robot
     from control_design.errors import DesignSpecError
-    from control_design.reference import check_trajectory_limits, task_trajectory
+    from control_design.reference import check_trajectory_limits, reference_task_name, reference_task_rule, task_trajectory
     from model.robot import load_robot
 
     kind = controller_kind(args.controller)
@@ -61,7 +74,8 @@ def run_track(args: argparse.Namespace) -> int:
         raise DesignSpecError(f"--payload: expected a mass >= 0 kg, got {args.payload!r}")
     check_out_dir(args.out)
     robot = load_robot(args.robot)
-    traj = task_trajectory(robot, args.task, args.waypoints, args.segment_time)
+    task = reference_task_name(robot) if args.task is None and args.waypoints is None else args.task
+    traj = task_trajectory(robot, task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate,
                           analyse=False)
@@ -69,12 +83,15 @@ def run_track(args: argparse.Namespace) -> int:
                              link_mass_scale=args.mass_scale)
     plant = robot if mismatch.is_exact else plant_with_mismatch(robot, mismatch)
     controller = design.controller(args.rate, saturate=not args.no_saturation)
-    result = simulate_tracking(plant, controller, traj, progress=ProgressLine("track", sys.stderr))
+    progress = ProgressLine("track", sys.stderr)
+    if args.task is None and args.waypoints is None:  # said when the run starts: a refused request stays one line
+        progress = _noted(progress, f"manip track: no --task: following {task!r} ({reference_task_rule(robot)})")
+    result = simulate_tracking(plant, controller, traj, progress=progress)
     met = result.metrics()
     out = out_dir(args.out)
     data = met.to_dict()
     data.update({
-        "task": str(args.waypoints) if args.waypoints else args.task, "duration_s": float(result.t[-1] - result.t[0]),
+        "task": str(args.waypoints) if args.waypoints else task, "duration_s": float(result.t[-1] - result.t[0]),
         "bandwidth_rad_s": args.bandwidth, "damping": design.damping, "phase_margin_deg": args.phase_margin,
         "plant": mismatch.describe(), "payload_kg": mismatch.payload_mass,
         "tau_m_max": None if result.tau_m_max is None else result.tau_m_max.tolist(), "substeps": result.substeps,
@@ -123,7 +140,8 @@ def register(subparsers: Any, full: bool = True) -> None:
         return
     add_spec_args(p)
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--task", default="pick-and-place", help="built-in task (default pick-and-place)")
+    src.add_argument("--task", default=None,
+                     help="a [[tasks]] entry of the robot file or 'tour' (default: the file's first task, else tour)")
     src.add_argument("--waypoints", default=None, metavar="FILE", help="TOML or CSV joint waypoint file")
     p.add_argument("--segment-time", type=float, default=None, metavar="S", help="duration of every segment, s (default 3)")
     p.add_argument("--payload", type=float, default=None, metavar="KG",

@@ -43,5 +43,6 @@ def register(subparsers: Any) -> None:
     p.add_argument("robot", help="built-in name, TOML or URDF file")
     p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="the figure to write (PNG, atomically)")
     p.add_argument("--samples", type=bounded_int(100, 5_000_000, "a number of samples"), default=200_000, metavar="N", help="joint samples (default 200000)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=bounded_int(0, 2**63 - 1, "a seed"), default=0, metavar="S",
+                   help="random seed, a whole number >= 0 (default 0)")
     p.set_defaults(func=run_workspace)

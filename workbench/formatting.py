@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
+from model.errors import InputError
 
 if TYPE_CHECKING:
     from closed_loop.result import TrackingMetrics
@@ -77,7 +78,8 @@ def table_cells(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> tuple[l
     """
     ncol = len(header)
     if any(len(row) != ncol for row in rows):
-        raise ValueError(f"rows: expected {ncol} cells each like the header, got {sorted({len(r) for r in rows})}")
+        raise InputError(f"expected {ncol} cells each like the header, got {sorted({len(r) for r in rows})}",
+                         parameter="rows")
     columns = [format_column([row[c] for row in rows]) for c in range(ncol)]
     numeric = [bool(rows) and all(is_number(row[c]) or _reads_as_number(row[c]) for row in rows) for c in range(ncol)]
     return [[columns[c][r] for c in range(ncol)] for r in range(len(rows))], numeric
@@ -128,8 +130,9 @@ def format_info(desc: RobotDescription) -> str:
     """The joint table, inertial data, motor data and torque limits of ``desc``, as plain text.
 
     The numbers of the robot file are written exactly (:func:`exact`: the
-    shortest text that reads back as the same float); each torque limit names
-    where it comes from (the robot file, or the design's default rule).
+    shortest text that reads back as the same float); each friction value and
+    torque limit names where it comes from (the robot file, the URDF, the
+    default, or the design's default rule).
     """
     from model.description import TORQUE_LIMIT_FROM_FILE
 
@@ -164,6 +167,20 @@ def format_info(desc: RobotDescription) -> str:
                            [[i + 1, lk.name, exact(lk.motor_inertia), exact(lk.gear_ratio), exact(lk.viscous_friction),
                              exact(lk.coulomb_friction[0]), exact(lk.coulomb_friction[1]),
                              f"{lk.gear_ratio ** 2 * lk.motor_inertia:.6g}"] for i, lk in enumerate(desc.links)])]
+    rows = []
+    for i, lk in enumerate(desc.links):
+        G = lk.gear_ratio
+        viscous_from, coulomb_from = desc.friction_source(i)
+        rows.append([i + 1, lk.name, exact(G * G * lk.viscous_friction), viscous_from,
+                     exact(abs(G) * lk.coulomb_friction[0]), exact(abs(G) * lk.coulomb_friction[1]), coulomb_from])
+    lines += ["", "Joint friction (joint side, G^2 B qd + |G| Tc sign(qd)) and where each value comes from",
+              format_table(["j", "name", "G^2 B [N m s/rad]", "viscous from", "|G| Tc+ [N m]", "|G| Tc- [N m]",
+                            "Coulomb from"], rows)]
+    if any(lk.velocity_limit is not None for lk in desc.links):
+        lines += ["", "Joint velocity limits (joint side; velocity_limit)",
+                  format_table(["j", "name", "qd_max", "unit"],
+                               [[i + 1, lk.name, "-" if lk.velocity_limit is None else exact(lk.velocity_limit),
+                                 f"{units[i]}/s"] for i, lk in enumerate(desc.links)])]
     file_name = Path(desc.path).name if desc.path else "the robot file"
     rows = []
     for i, lk in enumerate(desc.links):

@@ -30,6 +30,14 @@ def _check_writable(folder: Path, flag: str, shown: Path) -> None:
     os.unlink(probe)
 
 
+def _named(path: str | os.PathLike[str], flag: str, what: str) -> Path:
+    """``path`` as a Path, unless it is empty or holds a NUL byte (no file system has such a name)."""
+    text = os.fspath(path)
+    if not str(text).strip() or "\0" in str(text):
+        raise UsageError(f"{flag}: expected {what}, got {str(text)!r}")
+    return Path(text)
+
+
 def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
     """Check, creating nothing, that the folder ``path`` exists and is writable or can be created.
 
@@ -39,10 +47,10 @@ def check_out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
     Raises
     ------
     UsageError
-        Naming ``flag`` and the path: it is a file, lies under a file, or the
-        nearest existing folder cannot be written.
+        Naming ``flag`` and the path: it is empty or holds a NUL byte, is a file, lies under
+        a file, or the nearest existing folder cannot be written.
     """
-    out = Path(path)
+    out = _named(path, flag, "a directory name")
     if out.exists() and not out.is_dir():
         raise UsageError(f"{flag}: expected a directory, got the file {str(out)!r}")
     existing = out.absolute()
@@ -79,7 +87,7 @@ def out_dir(path: str | os.PathLike[str], flag: str = "--out") -> Path:
 
 def out_file(path: str | os.PathLike[str], flag: str = "--output", create: bool = True) -> Path:
     """Check that the file ``path`` can be written, its folder created if missing (``create=False``: only checked)."""
-    target = Path(path)
+    target = _named(path, flag, "a file name")
     if target.is_dir():
         raise UsageError(f"{flag}: expected a file name, got the directory {str(target)!r}")
     (out_dir if create else check_out_dir)(target.parent, flag)

@@ -82,7 +82,8 @@ class DisplayUnits:
 
     def __post_init__(self) -> None:
         if self.angle not in ("deg", "rad") or self.length not in ("mm", "m"):
-            raise ValueError(f"units: expected angle deg|rad and length mm|m, got {self.angle!r}, {self.length!r}")
+            raise InputError(f"expected angle deg|rad and length mm|m, got {self.angle!r}, {self.length!r}",
+                             parameter="units")
 
     def factor(self, revolute: bool) -> float:
         """Displayed value per SI unit (rad or m)."""
@@ -263,6 +264,7 @@ class TeachPage:
         self.server = server
         self.units = units
         self.limits = finite_limits(robot.description)
+        # the rest (within qlim); the clip binds only for a joint without limits resting beyond its slider's +-pi
         self.q = np.clip(robot.q_rest, self.limits[0], self.limits[1]).astype(float)
         self._lock = threading.RLock()
         self._pending_lock = threading.Lock()

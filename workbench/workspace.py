@@ -58,7 +58,7 @@ def workspace_figure(ws: "ReachableWorkspace", robot: "Robot") -> "Figure":
     ax3 = fig.add_subplot(1, 3, 1, projection="3d")
     dots = _dots(ws.points, ws.seed)
     ax3.scatter(dots[:, 0], dots[:, 1], dots[:, 2], s=2.5, c=dots[:, 2], cmap="viridis", alpha=0.6, linewidths=0)
-    q0 = np.clip(robot.q_rest, ws.limits[0], ws.limits[1])
+    q0 = robot.q_rest
     origins = np.vstack([robot.fkine_all(q0)[:, :3, 3], robot.fkine(q0)[None, :3, 3]])
     ax3.plot(origins[:, 0], origins[:, 1], origins[:, 2], "-o", color="k", lw=2.5, ms=3.5, label="arm at rest")
     ax3.set_xlabel("x [m]")

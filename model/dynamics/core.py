@@ -24,6 +24,7 @@ from .parameters import DynamicsParameters, ParameterLayout, parameter_layout
 from .singular import singular_dynamics_error, singular_joint
 from .symbolic import COMPILED_FUNCTIONS, DynamicsFunctions, build_functions
 from .workspace import Workspace
+from ..errors import InputError
 
 __all__ = ["Dynamics", "NoCompilerWarning", "source_fingerprint"]
 
@@ -104,11 +105,11 @@ class Dynamics:
         if type(p) is DynamicsParameters and p.layout is self.layout:
             return p
         if not isinstance(p, DynamicsParameters):
-            raise ValueError(f"p: expected DynamicsParameters (e.g. dynamics.parameters.with_payload(...)), "
-                             f"got {type(p).__name__}")
+            raise InputError(f"expected DynamicsParameters (e.g. dynamics.parameters.with_payload(...)), "
+                             f"got {type(p).__name__}", parameter="p")
         if p.layout.names != self.layout.names:
-            raise ValueError(f"p: expected the parameters of {self.description.name!r} ({self.layout.size} values), "
-                             f"got a layout of {p.layout.size}")
+            raise InputError(f"expected the parameters of {self.description.name!r} ({self.layout.size} values), "
+                             f"got a layout of {p.layout.size}", parameter="p")
         return p
 
     def workspace(self) -> Workspace:
@@ -191,7 +192,8 @@ class Dynamics:
             except IndexError:
                 ws = Workspace(lib)
         elif ws.library is not lib:
-            raise ValueError("ws: expected a workspace of this model's current library (make it with workspace())")
+            raise InputError("expected a workspace of this model's current library (make it with workspace())",
+                             parameter="ws")
         try:
             ev = ws._points.get(name) or ws.point(name)
             error: Exception | None = None
@@ -274,7 +276,7 @@ class Dynamics:
         N = arrays[0].shape[0]
         for arr, k in zip(arrays[1:], names[1:]):
             if arr.shape[0] != N:
-                raise ValueError(f"{k}: expected {N} rows like {names[0]}, got shape {arr.shape}")
+                raise InputError(f"expected {N} rows like {names[0]}, got shape {arr.shape}", parameter=k)
         if N == 0:
             return np.empty((0, width))
         return self._eval(name, [*arrays, params.vector], N)

@@ -32,6 +32,7 @@ import numpy as np
 from ..chain import Chain
 from ..description import RobotDescription
 from ..kinematics import point_jacobian_sym
+from ..errors import InputError
 
 __all__ = ["MOTOR_MODELS", "check_motor_model", "coulomb_limits_sx", "friction_sx", "rotor_energy_terms",
            "viscous_friction_sx"]
@@ -42,7 +43,7 @@ MOTOR_MODELS: tuple[str, ...] = ("reflected", "full")
 def check_motor_model(motor_model: str) -> str:
     """Return ``motor_model`` if it is one of :data:`MOTOR_MODELS`; ValueError naming it otherwise."""
     if motor_model not in MOTOR_MODELS:
-        raise ValueError(f"motor_model: expected one of {MOTOR_MODELS}, got {motor_model!r}")
+        raise InputError(f"expected one of {MOTOR_MODELS}, got {motor_model!r}", parameter="motor_model")
     return motor_model
 
 

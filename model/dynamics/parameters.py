@@ -24,6 +24,7 @@ import numpy as np
 
 from ..arrays import finite_vector
 from ..description import RobotDescription
+from ..errors import InputError
 
 __all__ = [
     "DynamicsParameters",
@@ -129,14 +130,14 @@ def _payload(mass: Any, com: Any, inertia: Any) -> tuple[float, np.ndarray, np.n
     """The payload fields checked: mass >= 0 kg, (3,) centre of mass, (6,) positive semi-definite inertia."""
     m = float(mass)
     if not np.isfinite(m) or m < 0:
-        raise ValueError(f"mass: expected a finite number >= 0 kg, got {m!r}")
+        raise InputError(f"expected a finite number >= 0 kg, got {m!r}", parameter="mass")
     c = finite_vector(com, 3, "com")
     six = finite_vector(inertia, 6, "inertia")
     ixx, iyy, izz, ixy, iyz, ixz = six
     eig = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
     if eig[0] < -1e-12 * max(1.0, abs(eig).max()):
-        raise ValueError(f"inertia: expected a positive semi-definite inertia, got {six.tolist()} "
-                         f"(eigenvalues {eig.tolist()})")
+        raise InputError(f"expected a positive semi-definite inertia, got {six.tolist()} "
+                         f"(eigenvalues {eig.tolist()})", parameter="inertia")
     return m, c, six
 
 
@@ -151,7 +152,7 @@ _FRICTION = (
 def _friction(n: int, name: str, value: Any, sign: float, expect: str) -> np.ndarray:
     v = finite_vector(value, n, name)
     if np.any(sign * v < 0):
-        raise ValueError(f"{name}: expected values {expect}, got {v.tolist()}")
+        raise InputError(f"expected values {expect}, got {v.tolist()}", parameter=name)
     return v
 
 
@@ -217,7 +218,7 @@ class DynamicsParameters:
             for name, field, sign, expect in _FRICTION:
                 _friction(lay.n, name, p[sl[field]], sign, expect)
         except ValueError as exc:
-            raise ValueError(f"p: {exc}") from None
+            raise InputError(f"{exc}", parameter="p") from None
         p.flags.writeable = False
         object.__setattr__(self, "vector", p)
 
@@ -239,7 +240,7 @@ class DynamicsParameters:
     def field(self, name: str) -> np.ndarray:
         """A copy of one field (``payload_mass``, ``payload_com``, ``viscous_friction``, ..., ``gravity``)."""
         if name not in self.layout.slices:
-            raise ValueError(f"field: expected one of {', '.join(self.layout.slices)}, got {name!r}")
+            raise InputError(f"expected one of {', '.join(self.layout.slices)}, got {name!r}", parameter="field")
         return self.vector[self.layout.slices[name]].copy()
 
     @property

@@ -134,7 +134,7 @@ def test_clik_on_a_reachable_segment_converges() -> None:
 def test_clik_argument_errors() -> None:
     arm = load_robot("spherical")
     segment = straight_line([0.3, 1.0, 0.3], [0.3, 1.0, 0.2], 1.0)
-    with pytest.raises(ValueError, match=r"inversion 'inverse': needs a square task Jacobian, got 2 components for 3 joints"):
+    with pytest.raises(ValueError, match=r"inversion: 'inverse' needs a square task Jacobian, got 2 components for 3 joints"):
         clik(arm, segment, SEED_Q0, dt=0.01, K=10.0, inversion="inverse", mask=[True, True, False])
     with pytest.raises(ValueError, match=r"inversion: expected one of"):
         clik(arm, segment, SEED_Q0, dt=0.01, K=10.0, inversion="svd")

@@ -283,9 +283,12 @@ def test_the_flag_table_names_real_flags_and_only_those_of_the_running_command()
                for a in sub._actions for opt in a.option_strings}
     for name, flag in FLAG_OF.items():
         assert re.search(r"--[\w-]+", flag).group(0) in options, (name, flag)
-    assert in_flag_terms("t_end: expected a whole number", argparse.Namespace(horizon=3.0)) == "--horizon: expected a whole number"
-    assert in_flag_terms("t_end: expected a whole number", argparse.Namespace(rate=1.0)) == "t_end: expected a whole number"
-    assert in_flag_terms("/x/bandwidth: bad", argparse.Namespace(bandwidth=1.0)) == "/x/bandwidth: bad"
+    t_end = InputError("expected a whole number", parameter="t_end")
+    assert in_flag_terms(t_end, argparse.Namespace(horizon=3.0)) == "--horizon: expected a whole number"
+    assert in_flag_terms(t_end, argparse.Namespace(rate=1.0)) == "t_end: expected a whole number"
+    assert in_flag_terms(InputError("/x/bandwidth: bad"), argparse.Namespace(bandwidth=1.0)) == "/x/bandwidth: bad"
+    # the field, not the text: a message that merely starts with a parameter's name is left as it is
+    assert in_flag_terms(InputError("bandwidth: bad"), argparse.Namespace(bandwidth=1.0)) == "bandwidth: bad"
 
 
 # ------------------------------------------------------------------ bounded sample counts

@@ -101,9 +101,7 @@ END_TO_END = ["panda", "ur5", "fixed_mid", "tilted"]
 
 def load_case(name, tmp_path_factory):
     path, tip = CASES[name](tmp_path_factory.mktemp(name))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the panda's <dynamics damping>: tested below
-        desc = description_from_urdf(path, {"tip_link": tip})
+    desc = description_from_urdf(path, {"tip_link": tip})
     names = [lk.name for lk in desc.links]
     ref, tip_frame = pinocchio_urdf_arm(path, tip, names, desc.gravity)
     return desc, ref, tip_frame
@@ -164,16 +162,21 @@ def test_fkine_and_jacob0_match_pinocchio(robot_case):
 
 
 def test_dynamics_match_pinocchio(robot_case):
+    """B, C, g, RNE and forward dynamics as Pinocchio computes them from the same file, the URDF's joint friction
+    included: our rne is ``B qdd + C qd + F(qd) + g`` with ``F = damping qd + friction sign(qd)`` (Pinocchio's
+    ``model.damping`` and ``model.friction``, which its rnea leaves out); the panda's damping is 0.003 on every joint."""
     robot, ref, _ = robot_case
     data = ref.createData()
     for q, qd, qdd in states(robot.n, 3):
         qp = pin_q(ref, q)
-        tau = pin.rnea(ref, data, qp, qd, qdd)
+        friction = ref.damping * qd + ref.friction * np.sign(qd)
+        tau = pin.rnea(ref, data, qp, qd, qdd) + friction
         close(robot.rne(q, qd, qdd), tau)
+        close(robot.friction(qd), friction)
         close(robot.inertia(q), np.triu(pin.crba(ref, data, qp)) + np.triu(pin.crba(ref, data, qp), 1).T)
         close(robot.gravload(q), pin.computeGeneralizedGravity(ref, data, qp))
         close(robot.coriolis(q, qd), pin.computeCoriolisMatrix(ref, data, qp, qd))
-        close(robot.accel(q, qd, tau), pin.aba(ref, data, qp, qd, tau))
+        close(robot.accel(q, qd, tau), pin.aba(ref, data, qp, qd, tau - friction))
 
 
 def test_load_robot_reads_a_urdf_path(tmp_path):
@@ -209,16 +212,6 @@ def test_toml_adds_motor_data_by_joint_name(tmp_path):
     assert desc.links[1].gear_ratio == 1.0 and desc.gravity == (0.0, 0.0, -9.8) and desc.name == "arm"
 
 
-def test_urdf_dynamics_tags_are_ignored_with_one_warning(tmp_path):
-    with pytest.warns(UserWarning, match=r"<dynamics damping friction> of joint\(s\) panda_joint1, .*panda_joint7 ignored") as record:
-        load_description(panda_toml(tmp_path, ""))
-    assert len([w for w in record if "dynamics" in str(w.message)]) == 1
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # the built-in gives [joints.*] for every joint: nothing to say
-        load_description("panda")
-
-
-@pytest.mark.filterwarnings("ignore::model.urdf.URDFDynamicsIgnoredWarning")
 @pytest.mark.parametrize("body, message", [
     ('[joints.panda_joint9]\ngear_ratio = 2.0\n',
      r"arm.toml: field 'joints.panda_joint9' .*expected a moving joint of the chain \(panda_joint1, .*panda_joint7\); 'panda_joint9' is not one"),

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from model.dynamics.stick_slip import A_EPS, F_EPS, V_EPS
+from model.errors import NumericalError
 
 __all__ = ["StickSlipResult", "coulomb_limits", "mode_dynamics", "indicators", "update_modes", "settle_modes",
            "start_modes", "simulate_stick_slip"]
@@ -96,7 +97,7 @@ def settle_modes(B_r: Any, tc_pos: np.ndarray, tc_neg: np.ndarray, modes: np.nda
         if np.array_equal(nxt, modes) and np.array_equal(qd, x[n:]):
             return modes, x
         modes, x = nxt, np.concatenate([x[:n], qd])
-    raise RuntimeError(f"settle_modes: the friction modes did not settle (last {modes.tolist()})")
+    raise NumericalError(f"settle_modes: the friction modes did not settle (last {modes.tolist()})")
 
 
 def start_modes(qd: np.ndarray, tc_pos: np.ndarray, tc_neg: np.ndarray) -> np.ndarray:
@@ -179,7 +180,7 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
             sol = solve_ivp(rhs, (t0, t1), x, method="DOP853", rtol=rtol, atol=atol,
                             t_eval=t_eval[(t_eval >= t0) & (t_eval <= t1)], events=[indicator(i) for i in range(n)])
             if sol.status < 0:
-                raise RuntimeError(f"simulate_stick_slip: solve_ivp failed on [{t0}, {t1}]: {sol.message}")
+                raise NumericalError(f"simulate_stick_slip: solve_ivp failed on [{t0}, {t1}]: {sol.message}")
             # a terminal event before the first t_eval point leaves sol.y an empty list: no samples
             for tk, xk in zip(sol.t, np.reshape(sol.y, (2 * n, -1)).T):
                 if not ts or tk > ts[-1]:
@@ -193,7 +194,7 @@ def simulate_stick_slip(robot: Any, profile: Any, x0: np.ndarray | None = None, 
             modes, x = settle_modes(lambda xv, tau=tau: B_r(xv, tau), tc_pos, tc_neg, modes, x)
             events.append(te)
             if len(events) > 4 * n and events[-4 * n] == te:
-                raise RuntimeError(f"simulate_stick_slip: {4 * n} events at t = {te} without progress")
+                raise NumericalError(f"simulate_stick_slip: {4 * n} events at t = {te} without progress")
             t0 = te
             t_eval = t_eval[t_eval > te]
             if te >= t1:
