@@ -26,7 +26,6 @@ cross-compiled by :mod:`fmu.cross` into the folders of :mod:`fmu.platforms`.
 from __future__ import annotations
 
 import hashlib
-import importlib.metadata
 import os
 import shutil
 import subprocess
@@ -41,6 +40,7 @@ import casadi as ca
 from model.codegen import generate_c
 from model.errors import InputError, ToolchainError
 from model.files import atomic_path
+from model.version import __version__
 
 from .cross import CASADI_CFLAGS, CFLAGS, CrossCompileError, compiler_for, place_binaries
 from .platforms import Platform, UnsupportedHostError, host_platform, platform_folder
@@ -80,11 +80,8 @@ class FmuBuildError(ToolchainError):
 
 
 def tool_version() -> str:
-    """The workbench's version, from the installed package metadata (written into modelDescription.xml)."""
-    try:
-        return importlib.metadata.version("manipulator-workbench")
-    except importlib.metadata.PackageNotFoundError:  # a source tree that was never installed
-        return "0+unknown"
+    """The workbench's version (:data:`model.version.__version__`), written into modelDescription.xml."""
+    return __version__
 
 
 def _check_version(fmi_version: int) -> int:

@@ -19,6 +19,7 @@ from fmu.validate import binary_problems, fmu_robot, model_description_problems
 from fmu.variables import build_table, derivative_unit, parse_unit, spec_from_plant, trivial_spec
 from model import InertiaConsistencyWarning, load_robot
 from model.plant import build_plant
+from model.version import __version__
 
 from tests.support.fmu_support import build_root, heavy_scara_fmu, planar2r_full_fmu, scara_fmu, trivial_fmu
 
@@ -143,6 +144,7 @@ def test_model_description_capabilities_and_experiment():
     assert root.find("CoSimulation").get("canHandleVariableCommunicationStepSize") == "true"
     assert root.find("DefaultExperiment").get("stepSize") == "0.001"
     assert root.get("variableNamingConvention") == "structured"
+    assert root.get("generationTool") == f"manipulator-workbench {__version__}"  # the one version
     assert {u.get("name") for u in root.find("UnitDefinitions")} >= {"rad", "m", "N.m", "kg.m2", "rad/s2"}
     assert fmu_robot(scara_fmu()) == ("scara", "reflected")
     assert fmu_robot(trivial_fmu()) is None
