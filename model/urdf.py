@@ -1,7 +1,7 @@
 """Robots from URDF: the serial chain of a URDF file as a :class:`~model.description.RobotDescription`.
 
-A URDF is read by ``yourdfpy`` (meshes never loaded, no scene graph) after the
-bytes have passed ``defusedxml`` with document type declarations refused, so
+A URDF is read by :mod:`model.urdf_xml` (links, joints and inertials; meshes never
+loaded) after the bytes have passed ``defusedxml`` with document type declarations refused, so
 neither an external entity (a local file, a URL) nor an entity bomb is ever
 expanded; files above :data:`MAX_URDF_BYTES` and trees with more than
 :data:`MAX_MOVING_JOINTS` moving joints are refused before any work (both are
@@ -21,7 +21,6 @@ joint up to ``tip_link`` become the description's ``tip``.
 from __future__ import annotations
 
 import dataclasses
-import io
 import math
 import warnings
 from dataclasses import dataclass
@@ -35,6 +34,7 @@ from .description import RobotDescription, RobotDescriptionError, _check_keys, _
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
 from .limits import read_bounded
+from .urdf_xml import UrdfRobot, parse_robot
 
 __all__ = [
     "MAX_URDF_BYTES",
@@ -99,14 +99,15 @@ class UrdfChain:
 # --------------------------------------------------------------------------- reading
 
 
-def read_urdf(path: str | Path) -> Any:
-    """Parse a URDF file safely into a ``yourdfpy.Robot`` (links and joints; meshes not loaded).
+def read_urdf(path: str | Path) -> UrdfRobot:
+    """Parse a URDF file safely into its links and joints (:class:`~model.urdf_xml.UrdfRobot`; no mesh read).
 
     Raises
     ------
     RobotDescriptionError
         The file is missing, larger than :data:`MAX_URDF_BYTES`, declares a document type
-        (entities), is not well-formed XML or not a ``<robot>``.
+        (entities), is not well-formed XML or not a ``<robot>``, or an element of it cannot be read
+        (:func:`~model.urdf_xml.parse_robot`).
     """
     import defusedxml
     import defusedxml.ElementTree as safe_et
@@ -124,15 +125,7 @@ def read_urdf(path: str | Path) -> Any:
         raise RobotDescriptionError(f"{path}: not well-formed XML: {exc}") from None
     if root.tag != "robot":
         raise RobotDescriptionError(f"{path}: the root element is <{root.tag}>: expected a URDF <robot>")
-    from yourdfpy import URDF
-
-    try:
-        urdf = URDF.load(io.BytesIO(data), build_scene_graph=False, build_collision_scene_graph=False,
-                         load_meshes=False, load_collision_meshes=False)
-    except (KeyError, AttributeError, ValueError, TypeError) as exc:
-        raise RobotDescriptionError(f"{path}: not a valid URDF ({type(exc).__name__}: {exc}): every <link> and "
-                                    "<joint> needs a name, every joint a type, a parent and a child link") from None
-    return urdf.robot
+    return parse_robot(root, str(path))
 
 
 def _unit_axis(path: Path, joint: Any) -> np.ndarray:
