@@ -1,6 +1,6 @@
 """Parameter sweeps: thousands of compiled closed loops on a Dask cluster, with their table and summary.
 
-:func:`sweep` runs every case of a :class:`~closed_loop.sweep_spec.SweepSpec` with the
+:func:`run_sweep` runs every case of a :class:`~closed_loop.sweep_spec.SweepSpec` with the
 compiled closed loop (:mod:`closed_loop.kernel`): the plant's payload, friction and
 link masses are kernel inputs, the control rate changes the schedule, a bandwidth or
 damping a design per case. Cases are grouped into tasks of a few hundred
@@ -45,7 +45,7 @@ from model.files import atomic_path, write_atomic
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
-           "nominal_run", "rerun_case", "run_cases", "summarise", "sweep"]
+           "nominal_run", "rerun_case", "run_cases", "run_sweep", "summarise"]
 
 #: Folder (inside the output folder) of the finished tasks of a running or interrupted sweep.
 PARTS_DIR = ".sweep-parts"
@@ -343,7 +343,7 @@ def summarise(spec: SweepSpec, table: Any, units: tuple[str, ...], bound: float 
     return out
 
 
-def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None = None,
+def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, host: str = "127.0.0.1", resume: bool = False,
           progress: Callable[[int], None] | None = None, stream: TextIO | None = None,
           plots: bool = True) -> SweepResult:

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from closed_loop.sweep import PARTS_DIR, run_cases, sweep
+from closed_loop.sweep import PARTS_DIR, run_cases, run_sweep
 from closed_loop.sweep_spec import SweepSpecError, case_values, load_spec, spec_from_dict
 from model.limits import MAX_SPEC_BYTES, MAX_SWEEP_CASES
 
@@ -115,7 +115,7 @@ def _tree_sockets(root: "psutil.Process") -> list:  # noqa: F821
 @pytest.fixture(scope="module")
 def one_worker(tmp_path_factory):
     out = tmp_path_factory.mktemp("sweep1")
-    return sweep(_spec(), out, workers=1), out
+    return run_sweep(_spec(), out, workers=1), out
 
 
 def test_two_workers_equal_one_worker_bit_for_bit_on_loopback_only(one_worker, tmp_path):
@@ -137,7 +137,7 @@ def test_two_workers_equal_one_worker_bit_for_bit_on_loopback_only(one_worker, t
     watcher = threading.Thread(target=watch, daemon=True)
     watcher.start()
     try:
-        two = sweep(_spec(), tmp_path, workers=2)
+        two = run_sweep(_spec(), tmp_path, workers=2)
     finally:
         stop.set()
         watcher.join()
@@ -214,17 +214,17 @@ def test_an_interrupted_sweep_resumes_from_the_cases_it_wrote(cluster, one_worke
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        sweep(_spec(), tmp_path, scheduler=address, progress=interrupt)
+        run_sweep(_spec(), tmp_path, scheduler=address, progress=interrupt)
     written = len(list((tmp_path / PARTS_DIR).glob("part-*.npz")))
     assert written >= 2 and not (tmp_path / "results.csv").exists()
     resumed = []
-    result = sweep(_spec(), tmp_path, scheduler=address, resume=True, progress=resumed.append, plots=False)
+    result = run_sweep(_spec(), tmp_path, scheduler=address, resume=True, progress=resumed.append, plots=False)
     assert sum(resumed) == 24 - 3 * written  # only the cases not written before ran
     assert result.table.equals(ref.table)
     with pytest.raises(SweepSpecError, match="holds the cases of another spec"):
         (tmp_path / PARTS_DIR).mkdir()
         (tmp_path / PARTS_DIR / "spec.json").write_text(json.dumps({"digest": "other"}))
-        sweep(_spec(), tmp_path, scheduler=address, resume=True, plots=False)
+        run_sweep(_spec(), tmp_path, scheduler=address, resume=True, plots=False)
 
 
 def test_a_worker_killed_mid_sweep_loses_no_case_and_counts_none_twice(cluster, tmp_path):
@@ -237,7 +237,7 @@ def test_a_worker_killed_mid_sweep_loses_no_case_and_counts_none_twice(cluster, 
         if len(counted) == 1:
             os.kill(workers[0].pid, signal.SIGKILL)
 
-    result = sweep(spec, tmp_path, scheduler=address, progress=kill_first, plots=False)
+    result = run_sweep(spec, tmp_path, scheduler=address, progress=kill_first, plots=False)
     assert workers[0].wait(timeout=10) == -signal.SIGKILL
     assert len(counted) == 40 and sum(counted) == 120  # every task reported once
     assert list(result.table["case"]) == list(range(120))
