@@ -183,6 +183,7 @@ def test_value_references_agree_between_header_and_xml():
     assert macros == xml
 
 
+@pytest.mark.needs("cmake")
 def test_rebuild_from_sources_with_fmpy_gives_the_same_results(tmp_path):
     """FMPy's `compile` path (CMake on sources/) rebuilds a binary that simulates identically."""
     from fmpy import extract

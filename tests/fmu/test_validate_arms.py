@@ -82,6 +82,7 @@ def test_validate_the_puma_560_with_default_settings():
     _assert_valid(validate_fmu(puma_fmu(), with_cosim=False))
 
 
+@pytest.mark.slow
 def test_validate_a_7_joint_arm_from_the_fmu_alone(capsys):
     from workbench.cli import main
 

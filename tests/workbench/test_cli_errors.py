@@ -22,6 +22,8 @@ import pytest
 from model.errors import InputError, NumericalError, WorkbenchError
 from workbench import cli
 
+from tests.support.process_tree import interruptible
+
 REPO = Path(__file__).resolve().parents[2]
 LIBRARY = ("model", "control_design", "closed_loop", "fmu", "workbench")
 
@@ -158,13 +160,14 @@ def test_readme_documents_the_cache_folder():
 
 
 # track at 4 kHz simulates for about 3 s after its first progress line, so the interrupt lands mid-run
-@pytest.mark.parametrize("argv", [["track", "scara", "--rate", "4000"], ["demo", "--robot", "scara", "--no-gif"]])
+@pytest.mark.parametrize("argv", [["track", "scara", "--rate", "4000"],
+                                  pytest.param(["demo", "--robot", "scara", "--no-gif"], marks=pytest.mark.slow)])
 def test_ctrl_c_exits_130_and_leaves_no_partial_file(tmp_path, argv):
     out = tmp_path / "out"
     log_out, log_err = tmp_path / "stdout.txt", tmp_path / "stderr.txt"
     with open(log_out, "w") as fo, open(log_err, "w") as fe:
         proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", *argv, "--out", str(out)], cwd=REPO,
-                                stdout=fo, stderr=fe, text=True)
+                                stdout=fo, stderr=fe, text=True, preexec_fn=interruptible)
         # wait until the command reports work (a progress line), then interrupt it shortly after
         deadline = time.monotonic() + 120
         while (log_out.stat().st_size + log_err.stat().st_size == 0 and time.monotonic() < deadline
