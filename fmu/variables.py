@@ -308,7 +308,6 @@ class VariableTable:
         spec = self.spec
         arrays = self.arrays()
         of_row = {r: a for a in arrays for r in a.rows()}
-        files = "\n".join(f'      <File name={quoteattr(f)}/>' for f in source_files)
 
         def unknowns(tag: str, items: Sequence[Unknown]) -> list[str]:
             merged: dict[int, set[int]] = {}
@@ -548,7 +547,6 @@ def derivative_unit(unit: str) -> str:
 
 def build_table(spec: ModelSpec) -> VariableTable:
     """Value references, attributes and the ModelStructure of ``spec``."""
-    nx, nu, np_, ny = len(spec.states), len(spec.inputs), len(spec.params), len(spec.outputs)
     state_is_output = {k for k in spec.output_state if k >= 0}
     variables: list[Variable] = []
 
