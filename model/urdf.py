@@ -4,7 +4,7 @@ A URDF is read by :mod:`model.urdf_xml` (links, joints and inertials; meshes nev
 loaded) after the bytes have passed ``defusedxml`` with document type declarations refused, so
 neither an external entity (a local file, a URL) nor an entity bomb is ever
 expanded; files above :data:`MAX_URDF_BYTES` and trees with more than
-:data:`MAX_MOVING_JOINTS` moving joints are refused before any work (both are
+:data:`MAX_MOVING_JOINTS` moving joints on the chain are refused before any work (both are
 the limits of :mod:`model.limits`, the same as for a robot TOML).
 
 The model is the chain from ``base_link`` (default: the URDF root) to
@@ -207,8 +207,8 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
     ------
     RobotDescriptionError
         Naming the joint or link: duplicate names, a link with two parents (a closed chain), no single
-        root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, too many
-        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``
+        root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, an unknown
+        ``base_link``/``tip_link``, a branching tree without ``tip_link``, or too many moving joints on the chain
         (the first of these stops the reading); then every bad origin, axis, limit, dynamics or
         inertial of the chain's joints and bodies, all in one error (its ``problems``).
     """
@@ -221,7 +221,6 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
     joints: dict[str, Any] = {}
     parent_of: dict[str, Any] = {}
     children: dict[str, list[Any]] = {name: [] for name in links}
-    moving = 0
     for joint in robot.joints:
         if joint.name in joints:
             raise RobotDescriptionError(f"{path}, joint {joint.name!r}: defined twice: expected unique joint names")
@@ -234,9 +233,6 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
         if joint.type not in (*_MOVING, "fixed"):
             raise RobotDescriptionError(f"{path}, joint {joint.name!r}: type {joint.type!r}: expected revolute, "
                                         "continuous, prismatic or fixed")
-        moving += joint.type in _MOVING
-        if moving > MAX_MOVING_JOINTS:
-            raise RobotDescriptionError(f"{path}: more than {MAX_MOVING_JOINTS} moving joints: above the joint-count limit")
         if joint.child in parent_of:
             raise RobotDescriptionError(
                 f"{path}, joint {joint.name!r}: link {joint.child!r} already has the parent joint "
@@ -266,6 +262,10 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
         path_joints.append(parent_of[name])
         name = parent_of[name].parent
     path_joints.reverse()
+    # the limit is the model's (its build grows like n^2): a humanoid's file holds more joints than one arm
+    if sum(j.type in _MOVING for j in path_joints) > MAX_MOVING_JOINTS:
+        raise RobotDescriptionError(f"{path}: more than {MAX_MOVING_JOINTS} moving joints: above the joint-count limit "
+                                    f"(on the chain {base!r} -> {tip_link!r})")
     on_chain = {j.name for j in path_joints}
     for joint in path_joints:
         if joint.mimic is not None and joint.type != "fixed":
