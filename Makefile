@@ -25,7 +25,7 @@ lint: $(VENV)/.installed
 	$(PY) -m ruff check --no-cache .
 
 test-fast: lint
-	$(PY) -m pytest -q -m "$(FAST)"
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "$(FAST)"
 
 test: lint
 	$(PY) -m pytest -q

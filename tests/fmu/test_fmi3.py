@@ -28,8 +28,8 @@ import pytest
 from tests.support.fmu_support import _quiet, build_root
 
 pytestmark = pytest.mark.fmi3
-#: The 7-joint panda takes most of this module's time: it is in the full suite only.
-ROBOTS = ("scara", "puma560", pytest.param("panda", marks=pytest.mark.slow))
+#: The 6- and 7-joint arms take most of this module's time: they are in the full suite only (make test).
+ROBOTS = ("scara", pytest.param("puma560", marks=pytest.mark.slow), pytest.param("panda", marks=pytest.mark.slow))
 T_END, H = 0.5, 0.01
 CS_RTOL = 1e-12
 ME_RTOL = 1e-10

@@ -115,6 +115,7 @@ def test_design_and_track_tour_outputs(tour):
     assert len(metrics["max_error"]) == 4
 
 
+@pytest.mark.slow
 def test_python_blocks_run(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     codes = [code for code, _ in blocks("python")]
