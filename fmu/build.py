@@ -15,8 +15,9 @@ The FMU is made of
   statically next to other FMUs (the wrapper's internal functions take the prefix too).
 
 Generation, compiler discovery and flags are those of :mod:`model.codegen`
-(the one CasADi -> C -> compiler pipeline), plus hidden visibility, so the
-binary exports the ``fmi2`` functions only and needs nothing but the C runtime;
+(the one CasADi -> C -> compiler pipeline: ``$CC``, else gcc or cc, for the host's
+binary), plus hidden visibility, so the binary exports the ``fmi2`` (FMI 2.0) or
+``fmi3`` (FMI 3.0) functions only and needs nothing but the C runtime;
 the units are compiled in parallel. No floating-point contraction
 (``-ffp-contract=off``: no fused multiply-add), so gcc and clang give the same numbers.
 Binaries for other platforms (Windows, macOS, Linux on aarch64) are

@@ -124,6 +124,13 @@ def test_spec_rejects_a_step_below_the_minimum_declared_in_the_xml():
     assert float(xml.find("Real").get("min")) == MIN_STEP
 
 
+def test_the_fmi3_description_names_no_fmi2_function(scara_table):
+    """One table renders both versions: its words must hold for both (internal_step said "per fmi2DoStep")."""
+    text = scara_table.model_description_fmi3("{guid}", [], "0")
+    assert "internal_step" in text and "per DoStep call" in text  # negative control: the description is there
+    assert "fmi2" not in text.lower()
+
+
 # ------------------------------------------------------ description and binary
 
 def test_fmpy_validation_has_zero_problems():
