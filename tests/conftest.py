@@ -106,7 +106,7 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config) -> None:
         tr.write_line(f"{sum(by_tool.values())} tests need system tools that are not on PATH "
                       f"(as root, tools/system-packages installs them: {' '.join(packages)}):")
         for name, count in sorted(by_tool.items()):
-            tr.write_line(f"  {name:<13} {count:>4} tests  ({TOOLS[name].purpose})")
+            tr.write_line(f"  {name:<13} {count:>4} tests  ({TOOLS[name].purpose}; package {TOOLS[name].packages})")
     for reason, count in sorted(others.items()):
         tr.write_line(f"  {count:>4} tests: {reason}")
     tr.write_line(f"set {REQUIRE_ALL}=1 to make any skip a failure (CI does)")
