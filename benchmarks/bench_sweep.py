@@ -70,7 +70,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from closed_loop import export_controller_fmu, run_closed_loop, simulate_tracking
     from closed_loop.kernel import closed_loop_kernel
     from closed_loop.schedule import Schedule
-    from closed_loop.sweep import case_setup, run_cases, sweep
+    from closed_loop.sweep import case_setup, run_cases, run_sweep
     from control_design import design_robot, reference_task
     from fmu import export_fmu
     from model import load_robot
@@ -128,7 +128,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for workers in (1, 2):
         with tempfile.TemporaryDirectory(prefix="bench_sweep_out_") as out:
             start_load = load()
-            r = sweep(spec, out, workers=workers, plots=False)
+            r = run_sweep(spec, out, workers=workers, plots=False)
             results[workers] = r
             s = r.summary
             say(f"sweep of {args.cases} cases, {workers} worker(s): {s['wall_time_s']:.1f} s wall "

@@ -7,7 +7,7 @@ The layer above the design (:mod:`control_design`) and the FMU export
 
 * :func:`~closed_loop.simulate.simulate_tracking` - the pure Python loop (compiled dynamics, RK4);
 * :func:`~closed_loop.kernel.closed_loop_kernel` - the same loop compiled whole: one C call per run;
-* :func:`closed_loop.sweep` (:mod:`closed_loop.sweep`, spec in :mod:`~closed_loop.sweep_spec`) - thousands of
+* :func:`~closed_loop.sweep.run_sweep` (spec in :mod:`~closed_loop.sweep_spec`) - thousands of
   compiled runs over varied plants and designs on Dask; it runs closed loops, so it lives here, above
   :mod:`control_design`;
 * :func:`~closed_loop.master.run_closed_loop` - the plant FMU (and a controller FMU) through FMPy;
@@ -19,48 +19,26 @@ The layer above the design (:mod:`control_design`) and the FMU export
 Dependencies point one way: ``model <- control_design <- closed_loop -> fmu``.
 """
 
-from .controller_fmu import (CONTROLLER_FMU_KINDS, ControllerFmuReport, controller_fmu_kind, controller_spec,
-                             export_controller_fmu, validate_controller_fmu)
-from .delay import OnePeriodDelay
-from .kernel import ClosedLoopKernel, KernelRun, closed_loop_kernel
-from .master import closed_loop_through_fmu, run_closed_loop, run_closed_loop_me, run_libcosim_closed_loop
-from .plots import joint_plot, torque_plot, tracking_error_plot
-from .progress import ProgressLine
-from .result import TrackingMetrics, TrackingResult
-from .schedule import MAX_SUBSTEP, Schedule, default_substeps
-from .simulate import simulate_tracking
-from .sweep_spec import SweepSpec, SweepSpecError, load_spec, spec_from_dict
-from .sweep import SweepResult, sweep  # noqa: E402 - the function `closed_loop.sweep`; the module stays importable
+from model.lazy import export_names, lazy_exports
 
-__all__ = [
-    "CONTROLLER_FMU_KINDS",
-    "ClosedLoopKernel",
-    "KernelRun",
-    "SweepResult",
-    "SweepSpec",
-    "SweepSpecError",
-    "ControllerFmuReport",
-    "MAX_SUBSTEP",
-    "OnePeriodDelay",
-    "ProgressLine",
-    "Schedule",
-    "TrackingMetrics",
-    "TrackingResult",
-    "closed_loop_kernel",
-    "closed_loop_through_fmu",
-    "controller_fmu_kind",
-    "controller_spec",
-    "default_substeps",
-    "export_controller_fmu",
-    "joint_plot",
-    "load_spec",
-    "run_closed_loop",
-    "run_closed_loop_me",
-    "run_libcosim_closed_loop",
-    "simulate_tracking",
-    "spec_from_dict",
-    "sweep",
-    "torque_plot",
-    "tracking_error_plot",
-    "validate_controller_fmu",
-]
+#: Submodule -> the names the package exports from it, imported on first use (:mod:`model.lazy`).
+_EXPORTS = {
+    "controller_fmu": (
+        "CONTROLLER_FMU_KINDS", "ControllerFmuReport", "controller_fmu_kind", "controller_spec",
+        "export_controller_fmu", "validate_controller_fmu"
+    ),
+    "delay": ("OnePeriodDelay",),
+    "kernel": ("ClosedLoopKernel", "KernelRun", "closed_loop_kernel"),
+    "master": ("closed_loop_through_fmu", "run_closed_loop", "run_closed_loop_me",
+               "run_libcosim_closed_loop"),
+    "plots": ("joint_plot", "torque_plot", "tracking_error_plot"),
+    "progress": ("ProgressLine",),
+    "result": ("TrackingMetrics", "TrackingResult"),
+    "schedule": ("MAX_SUBSTEP", "Schedule", "default_substeps"),
+    "simulate": ("simulate_tracking",),
+    "sweep_spec": ("SweepSpec", "SweepSpecError", "load_spec", "spec_from_dict"),
+    "sweep": ("SweepResult", "run_sweep"),
+}
+
+__all__ = export_names(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -44,7 +44,7 @@ from model.dynamics.singular import singular_dynamics_error
 from model.errors import NumericalError
 from model.plant import STEP_FUNCTIONS, build_plant
 from model.robot import Robot
-from model.errors import NumericalError, ToolchainError
+from model.errors import ToolchainError
 
 from .result import SATURATION_MARGIN, TrackingResult
 from .schedule import Schedule

@@ -1,6 +1,6 @@
 """Parameter sweeps: thousands of compiled closed loops on a Dask cluster, with their table and summary.
 
-:func:`sweep` runs every case of a :class:`~closed_loop.sweep_spec.SweepSpec` with the
+:func:`run_sweep` runs every case of a :class:`~closed_loop.sweep_spec.SweepSpec` with the
 compiled closed loop (:mod:`closed_loop.kernel`): the plant's payload, friction and
 link masses are kernel inputs, the control rate changes the schedule, a bandwidth or
 damping a design per case. Cases are grouped into tasks of a few hundred
@@ -46,7 +46,7 @@ from model.errors import ToolchainError
 from .sweep_spec import SweepSpec, SweepSpecError, case_values, check_joints
 
 __all__ = ["PARTS_DIR", "SweepResult", "SweepProgress", "assemble", "case_setup", "local_cluster", "metric_columns",
-           "nominal_run", "rerun_case", "rerun_case_through_fmu", "run_cases", "summarise", "sweep"]
+           "nominal_run", "rerun_case", "rerun_case_through_fmu", "run_cases", "run_sweep", "summarise"]
 
 #: Folder (inside the output folder) of the finished tasks of a running or interrupted sweep.
 PARTS_DIR = ".sweep-parts"
@@ -391,7 +391,7 @@ def _client(scheduler: str) -> Any:
         raise ToolchainError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}", parameter="scheduler") from None
 
 
-def sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None = None,
+def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, host: str = "127.0.0.1", resume: bool = False,
           progress: Callable[[int], None] | None = None, stream: TextIO | None = None,
           plots: bool = True) -> SweepResult:

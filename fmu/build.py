@@ -15,8 +15,9 @@ The FMU is made of
   statically next to other FMUs (the wrapper's internal functions take the prefix too).
 
 Generation, compiler discovery and flags are those of :mod:`model.codegen`
-(the one CasADi -> C -> compiler pipeline), plus hidden visibility, so the
-binary exports the ``fmi2`` functions only and needs nothing but the C runtime;
+(the one CasADi -> C -> compiler pipeline: ``$CC``, else gcc or cc, for the host's
+binary), plus hidden visibility, so the binary exports the ``fmi2`` (FMI 2.0) or
+``fmi3`` (FMI 3.0) functions only and needs nothing but the C runtime;
 the units are compiled in parallel. No floating-point contraction
 (``-ffp-contract=off``: no fused multiply-add), so gcc and clang give the same numbers.
 Binaries for other platforms (Windows, macOS, Linux on aarch64) are
@@ -26,7 +27,6 @@ cross-compiled by :mod:`fmu.cross` into the folders of :mod:`fmu.platforms`.
 from __future__ import annotations
 
 import hashlib
-import importlib.metadata
 import os
 import shutil
 import subprocess
@@ -41,6 +41,7 @@ import casadi as ca
 from model.codegen import PLANT_STEP_SOURCES, generate_c
 from model.errors import InputError, ToolchainError
 from model.files import atomic_path
+from model.version import __version__
 
 from .cross import CASADI_CFLAGS, CFLAGS, CrossCompileError, compiler_for, place_binaries
 from .platforms import Platform, UnsupportedHostError, host_platform, platform_folder, resolve_platforms
@@ -80,11 +81,8 @@ class FmuBuildError(ToolchainError):
 
 
 def tool_version() -> str:
-    """The workbench's version, from the installed package metadata (written into modelDescription.xml)."""
-    try:
-        return importlib.metadata.version("manipulator-workbench")
-    except importlib.metadata.PackageNotFoundError:  # a source tree that was never installed
-        return "0+unknown"
+    """The workbench's version (:data:`model.version.__version__`), written into modelDescription.xml."""
+    return __version__
 
 
 def _check_version(fmi_version: int) -> int:

@@ -160,7 +160,7 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     def sample(k: int) -> None:
         for name, index in indices.items():
             vrs = [references[index][n] for n in output_names]
-            values[name][k] = observer.last_real_values(index, vrs) if vrs else []
+            values[name][k] = observer.last_real_values(index, vrs) if vrs else []  # noqa: F821 - deleted after the run
 
     def apply(time: float) -> None:
         if inputs is None or not input_names:
@@ -168,7 +168,7 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
         u = [float(v) for v in inputs(time)]
         for index in indices.values():
             vrs = [references[index][n] for n in input_names]
-            if not manipulator.slave_real_values(index, vrs, u):
+            if not manipulator.slave_real_values(index, vrs, u):  # noqa: F821 - deleted after the run
                 raise CosimError(f"libcosim refused the inputs at t = {time}: {last_error()}")
 
     for k in range(n_steps):

@@ -3,7 +3,7 @@
 :func:`validate_fmu` runs every check and returns a :class:`ValidationReport`:
 
 * FMPy's validation of ``modelDescription.xml`` (schema, names, units, ModelStructure);
-* the binary: it exports the ``fmi2`` functions only and needs only libc and libm; the
+* the binary: it exports the ``fmi2`` or ``fmi3`` functions (its FMI version's) only and needs only libc and libm; the
   binaries of other platforms (Windows, macOS, Linux on aarch64) are listed and
   checked structurally (:mod:`fmu.binaries`);
 * Co-Simulation and Model Exchange (CVode) runs by FMPy against the one plant
@@ -16,7 +16,8 @@
   the FMU's own step to rounding (the FMU is the plant);
 * FMU state get/set and serialise/deserialise round trips, bit for bit;
 * directional derivatives against central finite differences;
-* libcosim, the second importer: two instances side by side, against FMPy.
+* libcosim, the second importer (FMI 2.0 only: skipped for an FMI 3.0 FMU): two instances side by side,
+  against FMPy.
 
 Every function here that opens an FMU first passes it through
 :func:`fmu.archive.check_fmu_archive` (limits, paths, links, zip bombs): a
@@ -41,7 +42,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from model.errors import InputError, NumericalError
+from model.errors import InputError
 
 from .archive import check_fmu_archive, model_description_xml
 from .variables import substeps

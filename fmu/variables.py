@@ -60,9 +60,9 @@ __all__ = [
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 STEP_NAME = "internal_step"
 #: Smallest internal step, s: the check of :class:`ModelSpec` and the ``min`` of ``internal_step`` in the XML.
-#: With at most :data:`MAX_SUBSTEPS` sub-steps per ``fmi2DoStep`` it bounds the work of one call.
+#: With at most :data:`MAX_SUBSTEPS` sub-steps per ``fmi2DoStep`` or ``fmi3DoStep`` it bounds the work of one call.
 MIN_STEP = 1e-6
-#: Most RK4 sub-steps of one ``fmi2DoStep`` (``MW_MAX_SUBSTEPS`` of ``fmu/c/instance.h``); more is an fmi2Error.
+#: Most RK4 sub-steps of one ``fmi2DoStep`` or ``fmi3DoStep`` (``MW_MAX_SUBSTEPS`` of ``fmu/c/instance.h``); more is an error status.
 MAX_SUBSTEPS = 1_000_000
 #: Relative noise of ``h / internal_step`` forgiven when counting sub-steps (``MW_SUBSTEP_RTOL``).
 SUBSTEP_RTOL = 1e-8
@@ -315,7 +315,6 @@ class VariableTable:
         spec = self.spec
         arrays = self.arrays()
         of_row = {r: a for a in arrays for r in a.rows()}
-        files = "\n".join(f'      <File name={quoteattr(f)}/>' for f in source_files)
 
         def unknowns(tag: str, items: Sequence[Unknown]) -> list[str]:
             merged: dict[int, set[int]] = {}
@@ -557,7 +556,6 @@ def derivative_unit(unit: str) -> str:
 
 def build_table(spec: ModelSpec) -> VariableTable:
     """Value references, attributes and the ModelStructure of ``spec``."""
-    nx, nu, np_, ny = len(spec.states), len(spec.inputs), len(spec.params), len(spec.outputs)
     state_is_output = {k for k in spec.output_state if k >= 0}
     variables: list[Variable] = []
 
@@ -589,7 +587,7 @@ def build_table(spec: ModelSpec) -> VariableTable:
         start=float(spec.step), unit="s", min=MIN_STEP, settable="initial",
         description="step of the co-simulation integrator (classical RK4): a communication step h "
                     "takes ceil(h / internal_step) equal sub-steps (k if h / internal_step is within a "
-                    f"relative {SUBSTEP_RTOL:g} of an integer k), at most {MAX_SUBSTEPS} per fmi2DoStep")
+                    f"relative {SUBSTEP_RTOL:g} of an integer k), at most {MAX_SUBSTEPS} per DoStep call")
 
     nz = spec.modes.nz if spec.modes is not None else 0
     for i in range(nz):

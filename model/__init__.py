@@ -6,54 +6,27 @@ modules that build symbolic functions (:mod:`model.kinematics`,
 and ``manip info`` start fast. The dynamics class is :class:`model.dynamics.Dynamics`.
 """
 
-from .chain import Chain, build_chain
-from .description import BUILTIN_ROBOTS, InertiaConsistencyWarning, LinkDescription, RobotDescription, RobotDescriptionError
-from .errors import InputError, NumericalError, SingularDynamicsError, ToolchainError, WorkbenchError
-from .loading import load_description
-from .clik import CLIKResult, clik, seed_clik_task
-from .ik import IKResult, IKSolution, NoClosedFormError, WorkspaceError
-from .robot import Robot, load_robot
-from .singularity import SingularityReport
-from .tasks import BUILTIN_TASKS, PICK_AND_PLACE, Task, WaypointError, find_task, load_waypoints, pick_and_place, robot_tasks
-from .trajectory import JointPath, Trajectory, ctraj, jtraj, straight_line, trapezoidal, via_points
+from .lazy import export_names, lazy_exports
+from .version import __version__ as __version__
 
-__all__ = [
-    "Chain",
-    "build_chain",
-    "find_task",
-    "robot_tasks",
-    "CLIKResult",
-    "InputError",
-    "NumericalError",
-    "ToolchainError",
-    "WorkbenchError",
-    "IKResult",
-    "IKSolution",
-    "NoClosedFormError",
-    "SingularDynamicsError",
-    "SingularityReport",
-    "WorkspaceError",
-    "clik",
-    "seed_clik_task",
-    "BUILTIN_ROBOTS",
-    "BUILTIN_TASKS",
-    "InertiaConsistencyWarning",
-    "JointPath",
-    "LinkDescription",
-    "PICK_AND_PLACE",
-    "Robot",
-    "RobotDescription",
-    "RobotDescriptionError",
-    "Task",
-    "Trajectory",
-    "WaypointError",
-    "ctraj",
-    "jtraj",
-    "load_description",
-    "load_robot",
-    "load_waypoints",
-    "pick_and_place",
-    "straight_line",
-    "trapezoidal",
-    "via_points",
-]
+#: Submodule -> the names the package exports from it, imported on first use (:mod:`model.lazy`).
+_EXPORTS = {
+    "chain": ("Chain", "build_chain"),
+    "description": (
+        "BUILTIN_ROBOTS", "InertiaConsistencyWarning", "LinkDescription", "RobotDescription", "RobotDescriptionError"
+    ),
+    "errors": ("InputError", "NumericalError", "SingularDynamicsError", "ToolchainError", "WorkbenchError"),
+    "loading": ("load_description",),
+    "clik": ("CLIKResult", "clik", "seed_clik_task"),
+    "ik": ("IKResult", "IKSolution", "NoClosedFormError", "WorkspaceError"),
+    "robot": ("Robot", "load_robot"),
+    "singularity": ("SingularityReport",),
+    "tasks": (
+        "BUILTIN_TASKS", "PICK_AND_PLACE", "Task", "WaypointError", "find_task", "load_waypoints", "pick_and_place",
+        "robot_tasks"
+    ),
+    "trajectory": ("JointPath", "Trajectory", "ctraj", "jtraj", "straight_line", "trapezoidal", "via_points"),
+}
+
+__all__ = export_names(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -148,7 +148,7 @@ def read_joint_table(path: str | Path, joint_names: Sequence[str], required: Seq
         raise _fail(p, "", f"not UTF-8 text (byte {exc.start}): expected a comma-separated {what}") from None
     lines = [(k, ln) for k, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
-        raise _fail(p, "", f"empty: expected a header line 'time,...' and rows of numbers")
+        raise _fail(p, "", "empty: expected a header line 'time,...' and rows of numbers")
     head_no, head_line = lines[0]
     for sep, name in ((";", "semicolons"), ("\t", "tabs")):
         if sep in head_line:

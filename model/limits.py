@@ -5,8 +5,8 @@ without executing anything and refused, with a one-line error naming the file
 and the limit, before it can cost minutes or gigabytes:
 
 * :data:`MAX_FILE_BYTES`: a robot TOML, a URDF or a waypoint file;
-* :data:`MAX_JOINTS`: moving joints of a robot (TOML ``[[links]]``, URDF moving
-  joints). The build grows like n^2 in generated operations (coriolis: 106,000
+* :data:`MAX_JOINTS`: moving joints of a robot (TOML ``[[links]]``, the moving
+  joints of a URDF's chain). The build grows like n^2 in generated operations (coriolis: 106,000
   at n = 25, see ``docs/model-equations.md``) and gcc's time and memory with it;
   ``benchmarks/bench_build.py`` builds up to 25 joints, a 50-link file took
   7.9 GB, so 32 leaves room above the largest chain measured and refuses the

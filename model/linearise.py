@@ -35,7 +35,6 @@ from .arm import DynamicArm
 from .arrays import as_joint_vector
 from .errors import InputError
 from .plant import build_plant
-from .errors import InputError
 
 __all__ = ["linearise", "OUTPUT_KINDS"]
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .description import BUILTIN_DIR, BUILTIN_ROBOTS, RobotDescription, RobotDescriptionError, description_from_dict
 from .errors import did_you_mean
+from .example_robots import erd_description, is_erd_name
 from .limits import load_toml
 from .urdf import description_from_urdf, description_from_urdf_toml
 
@@ -17,8 +18,11 @@ __all__ = ["load_description"]
 
 
 def load_description(name_or_path: str | Path) -> RobotDescription:
-    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`), a TOML file or a ``.urdf`` file by path."""
+    """Load a built-in robot by name (see :data:`BUILTIN_ROBOTS`), an arm of the example-robot-data
+    collection (``erd:ur10``: :mod:`model.example_robots`), a TOML file or a ``.urdf`` file by path."""
     text_name = str(name_or_path)
+    if is_erd_name(text_name) and not Path(text_name).exists():
+        return erd_description(text_name)
     if text_name in BUILTIN_ROBOTS:
         path = BUILTIN_DIR / f"{text_name}.toml"
     else:

@@ -1,10 +1,10 @@
 """Robots from URDF: the serial chain of a URDF file as a :class:`~model.description.RobotDescription`.
 
-A URDF is read by ``yourdfpy`` (meshes never loaded, no scene graph) after the
-bytes have passed ``defusedxml`` with document type declarations refused, so
+A URDF is read by :mod:`model.urdf_xml` (links, joints and inertials; meshes never
+loaded) after the bytes have passed ``defusedxml`` with document type declarations refused, so
 neither an external entity (a local file, a URL) nor an entity bomb is ever
 expanded; files above :data:`MAX_URDF_BYTES` and trees with more than
-:data:`MAX_MOVING_JOINTS` moving joints are refused before any work (both are
+:data:`MAX_MOVING_JOINTS` moving joints on the chain are refused before any work (both are
 the limits of :mod:`model.limits`, the same as for a robot TOML).
 
 The model is the chain from ``base_link`` (default: the URDF root) to
@@ -21,7 +21,6 @@ joint up to ``tip_link`` become the description's ``tip``.
 from __future__ import annotations
 
 import dataclasses
-import io
 import math
 import sys
 from dataclasses import dataclass
@@ -36,6 +35,7 @@ from .description import (FROM_DEFAULT, FROM_FILE, FROM_URDF, RobotDescription, 
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
 from .limits import read_bounded
+from .urdf_xml import UrdfRobot, parse_robot
 
 __all__ = [
     "MAX_URDF_BYTES",
@@ -104,14 +104,15 @@ class UrdfChain:
 # --------------------------------------------------------------------------- reading
 
 
-def read_urdf(path: str | Path) -> Any:
-    """Parse a URDF file safely into a ``yourdfpy.Robot`` (links and joints; meshes not loaded).
+def read_urdf(path: str | Path) -> UrdfRobot:
+    """Parse a URDF file safely into its links and joints (:class:`~model.urdf_xml.UrdfRobot`; no mesh read).
 
     Raises
     ------
     RobotDescriptionError
         The file is missing, larger than :data:`MAX_URDF_BYTES`, declares a document type
-        (entities), is not well-formed XML or not a ``<robot>``.
+        (entities), is not well-formed XML or not a ``<robot>``, or an element of it cannot be read
+        (:func:`~model.urdf_xml.parse_robot`).
     """
     import defusedxml
     import defusedxml.ElementTree as safe_et
@@ -129,15 +130,7 @@ def read_urdf(path: str | Path) -> Any:
         raise RobotDescriptionError(f"{path}: not well-formed XML: {exc}") from None
     if root.tag != "robot":
         raise RobotDescriptionError(f"{path}: the root element is <{root.tag}>: expected a URDF <robot>")
-    from yourdfpy import URDF
-
-    try:
-        urdf = URDF.load(io.BytesIO(data), build_scene_graph=False, build_collision_scene_graph=False,
-                         load_meshes=False, load_collision_meshes=False)
-    except (KeyError, AttributeError, ValueError, TypeError) as exc:
-        raise RobotDescriptionError(f"{path}: not a valid URDF ({type(exc).__name__}: {exc}): every <link> and "
-                                    "<joint> needs a name, every joint a type, a parent and a child link") from None
-    return urdf.robot
+    return parse_robot(root, str(path))
 
 
 def _unit_axis(path: Path, joint: Any) -> np.ndarray:
@@ -238,8 +231,8 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
     ------
     RobotDescriptionError
         Naming the joint or link: duplicate names, a link with two parents (a closed chain), no single
-        root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, too many
-        moving joints, an unknown ``base_link``/``tip_link``, or a branching tree without ``tip_link``
+        root, a floating or planar joint, a mimic joint on the chain, an unknown joint type, an unknown
+        ``base_link``/``tip_link``, a branching tree without ``tip_link``, or too many moving joints on the chain
         (the first of these stops the reading); then every bad origin, axis, limit, dynamics or
         inertial of the chain's joints and bodies, all in one error (its ``problems``).
     """
@@ -252,7 +245,6 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
     joints: dict[str, Any] = {}
     parent_of: dict[str, Any] = {}
     children: dict[str, list[Any]] = {name: [] for name in links}
-    moving = 0
     for joint in robot.joints:
         if joint.name in joints:
             raise RobotDescriptionError(f"{path}, joint {joint.name!r}: defined twice: expected unique joint names")
@@ -265,9 +257,6 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
         if joint.type not in (*_MOVING, "fixed"):
             raise RobotDescriptionError(f"{path}, joint {joint.name!r}: type {joint.type!r}: expected revolute, "
                                         "continuous, prismatic or fixed")
-        moving += joint.type in _MOVING
-        if moving > MAX_MOVING_JOINTS:
-            raise RobotDescriptionError(f"{path}: more than {MAX_MOVING_JOINTS} moving joints: above the joint-count limit")
         if joint.child in parent_of:
             raise RobotDescriptionError(
                 f"{path}, joint {joint.name!r}: link {joint.child!r} already has the parent joint "
@@ -297,6 +286,10 @@ def serial_chain(robot: Any, path: str | Path, base_link: str | None = None, tip
         path_joints.append(parent_of[name])
         name = parent_of[name].parent
     path_joints.reverse()
+    # the limit is the model's (its build grows like n^2): a humanoid's file holds more joints than one arm
+    if sum(j.type in _MOVING for j in path_joints) > MAX_MOVING_JOINTS:
+        raise RobotDescriptionError(f"{path}: more than {MAX_MOVING_JOINTS} moving joints: above the joint-count limit "
+                                    f"(on the chain {base!r} -> {tip_link!r})")
     on_chain = {j.name for j in path_joints}
     for joint in path_joints:
         if joint.mimic is not None and joint.type != "fixed":

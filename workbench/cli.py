@@ -16,10 +16,10 @@ import argparse
 import os
 import sys
 import warnings
-from importlib.metadata import PackageNotFoundError, version
 from typing import Sequence
 
 from model.errors import InputError, WorkbenchError
+from model.version import __version__
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_sweep, cmd_track
 from . import cmd_teach, cmd_workspace  # teach page and workspace figure
@@ -50,13 +50,6 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0 if result.fmu_ok else 1
 
 
-def _version() -> str:
-    try:
-        return version("manipulator-workbench")
-    except PackageNotFoundError:  # run from a source tree that was never installed
-        return "unknown (not installed)"
-
-
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The ``manip`` parser; with ``only`` a command name, the other commands get their name and help only.
 
@@ -64,7 +57,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     keeps ``manip robots`` and ``manip info`` from importing it.
     """
     parser = OneLineParser(prog="manip", description="Model, control and export robot manipulators.")
-    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     cmd_model.register(sub)
     cmd_design.register(sub, full=only in (None, "design"))
@@ -129,7 +122,7 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``manip`` console command; returns the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    command = next((a for a in argv if not a.startswith("-")), None)
+    command = next((a for a in argv if not a.startswith("-")), "")  # none: `manip --help` lists the commands only
     try:
         args = build_parser(only=command).parse_args(argv)
     except ArgumentsError as exc:  # argparse's refusal, as one line (its usage is behind --help)

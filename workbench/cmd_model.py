@@ -20,8 +20,14 @@ def _cmd_robots(args: argparse.Namespace) -> int:
 
     from .formatting import format_table
 
+    names = list(BUILTIN_ROBOTS)
+    if args.all:  # the example-robot-data arms too; without the robots extra one line says how to get them
+        from model.example_robots import collection_dir, erd_names
+
+        collection_dir()
+        names += erd_names()
     rows = []
-    for name in BUILTIN_ROBOTS:
+    for name in names:
         desc = load_description(name)
         rows.append([name, desc.n, desc.joint_types, desc.description])
     print(format_table(["robot", "joints", "types", "description"], rows))
@@ -62,10 +68,12 @@ def _cmd_export_urdf(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``robots``, ``info``, ``build`` and ``export-urdf`` to the CLI's sub-command parsers."""
-    p = subparsers.add_parser("robots", help="list the built-in robots")
+    p = subparsers.add_parser("robots", help="list the built-in robots (--all: and the example-robot-data arms)")
+    p.add_argument("--all", action="store_true",
+                   help="also the arms of the example-robot-data collection (erd:NAME; the robots extra)")
     p.set_defaults(func=_cmd_robots)
     p = subparsers.add_parser("info", help="print a robot's DH table, inertial and motor data")
-    p.add_argument("robot", help="built-in name or TOML file")
+    p.add_argument("robot", help="built-in name, erd:NAME (manip robots --all), TOML or URDF file")
     p.set_defaults(func=_cmd_info)
     p = subparsers.add_parser("build", help="generate, compile and cache a robot's dynamics C; report the build time")
     p.add_argument("robot", help="built-in name or TOML file")

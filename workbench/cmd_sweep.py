@@ -15,12 +15,12 @@ from typing import Any
 from .args import UsageError, add_no_plots, host_address, scheduler_address
 from .outputs import check_out_dir
 
-__all__ = ["register", "run_sweep"]
+__all__ = ["register", "run_sweep_command"]
 
 
-def run_sweep(args: argparse.Namespace) -> int:
+def run_sweep_command(args: argparse.Namespace) -> int:
     """``manip sweep``: run a sweep spec, write its table, summary and plots."""
-    from closed_loop.sweep import sweep
+    from closed_loop.sweep import run_sweep
     from closed_loop.sweep_spec import load_spec
 
     if args.workers is not None and args.workers < 1:
@@ -29,7 +29,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         raise UsageError("--workers: the cluster at --scheduler has its own workers; give one of the two")
     spec = load_spec(args.spec)
     check_out_dir(args.out)
-    result = sweep(spec, args.out, workers=args.workers, scheduler=args.scheduler, host=args.listen,
+    result = run_sweep(spec, args.out, workers=args.workers, scheduler=args.scheduler, host=args.listen,
                    resume=args.resume, plots=not args.no_plots)
     s = result.summary
     q = s["max_error_quantiles"]
@@ -51,7 +51,7 @@ def run_sweep(args: argparse.Namespace) -> int:
 def register(subparsers: Any, full: bool = True) -> None:
     """Add the ``sweep`` sub-command to ``manip``'s sub-parsers."""
     p = subparsers.add_parser("sweep", help="closed-loop runs over varied payload, friction, masses, gains, rate (Dask)")
-    p.set_defaults(func=run_sweep)
+    p.set_defaults(func=run_sweep_command)
     if not full:
         return
     p.add_argument("spec", help="sweep spec (TOML)")

@@ -34,7 +34,7 @@ def sweep_section(report: Report, out: Path, robot: str, *, plots: bool = True, 
     False: the table and summary only. The bound of the exceedance probability is :data:`DEMO_BOUND`.
     Returns the files written.
     """
-    from closed_loop.sweep import nominal_run, sweep
+    from closed_loop.sweep import nominal_run, run_sweep
     from closed_loop.sweep_spec import spec_from_dict
 
     data = {**DEMO_SWEEP, "robot": str(robot), "rate_hz": rate_hz}
@@ -42,7 +42,7 @@ def sweep_section(report: Report, out: Path, robot: str, *, plots: bool = True, 
         data["bandwidth"] = bandwidth
     spec = spec_from_dict({**data, "bound": DEMO_BOUND}, "demo sweep")
     nominal = float(nominal_run(spec).max_error.max())  # the same spec: its setup serves the worst-case re-run too
-    result = sweep(spec, out / SWEEP_DIR, workers=min(2, os.cpu_count() or 1), plots=plots)
+    result = run_sweep(spec, out / SWEEP_DIR, workers=min(2, os.cpu_count() or 1), plots=plots)
     s = result.summary
     b = s["bound"]
     q = s["max_error_quantiles"]

@@ -188,7 +188,7 @@ def test_negative_controls_the_tolerances_tell_plants_apart(puma, tour, designs,
 def test_a_sweeps_worst_case_rerun_through_the_plant_fmu_reproduces_its_max_error(tmp_path):
     """The sweep's table describes the FMU a user hands on: its worst case (payload, friction and link
     masses varied) re-run through the exported plant FMU gives the same max_error to 1e-9 rad (seen 0)."""
-    from closed_loop.sweep import rerun_case_through_fmu, sweep
+    from closed_loop.sweep import rerun_case_through_fmu, run_sweep
     from closed_loop.sweep_spec import spec_from_dict
 
     spec = spec_from_dict({"robot": "puma560", "controller": "pd", "task": "tour", "samples": 4, "seed": 3,
@@ -196,7 +196,7 @@ def test_a_sweeps_worst_case_rerun_through_the_plant_fmu_reproduces_its_max_erro
                                     "link_mass_scale": [0.9, 1.1]}})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
-        result = sweep(spec, workers=1, plots=False)
+        result = run_sweep(spec, workers=1, plots=False)
         worst = result.summary["worst_case"]
         via_fmu = rerun_case_through_fmu(spec, worst["case"], tmp_path)
     assert abs(via_fmu.metrics().max_error.max() - worst["max_error"]) <= TOL

@@ -24,9 +24,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from closed_loop.sweep import PARTS_DIR, run_cases, sweep
+from closed_loop.sweep import PARTS_DIR, run_cases, run_sweep
 from closed_loop.sweep_spec import SweepSpecError, case_values, load_spec, spec_from_dict
 from model.limits import MAX_SPEC_BYTES, MAX_SWEEP_CASES
+
+from tests.support.process_tree import alive, interruptible, listening_ports, marked_env
 
 BASE = {"robot": "scara", "controller": "ct", "samples": 24, "seed": 3, "method": "random", "bound": 0.0015,
         "batch": 3, "vary": {"payload_mass": [0.0, 3.0], "friction_scale": [0.5, 2.0], "link_mass_scale": [0.8, 1.2]}}
@@ -115,9 +117,10 @@ def _tree_sockets(root: "psutil.Process") -> list:  # noqa: F821
 @pytest.fixture(scope="module")
 def one_worker(tmp_path_factory):
     out = tmp_path_factory.mktemp("sweep1")
-    return sweep(_spec(), out, workers=1), out
+    return run_sweep(_spec(), out, workers=1), out
 
 
+@pytest.mark.cluster
 def test_two_workers_equal_one_worker_bit_for_bit_on_loopback_only(one_worker, tmp_path):
     import psutil
 
@@ -137,7 +140,7 @@ def test_two_workers_equal_one_worker_bit_for_bit_on_loopback_only(one_worker, t
     watcher = threading.Thread(target=watch, daemon=True)
     watcher.start()
     try:
-        two = sweep(_spec(), tmp_path, workers=2)
+        two = run_sweep(_spec(), tmp_path, workers=2)
     finally:
         stop.set()
         watcher.join()
@@ -203,6 +206,7 @@ def cluster(tmp_path_factory):
                 p.kill()
 
 
+@pytest.mark.cluster
 def test_an_interrupted_sweep_resumes_from_the_cases_it_wrote(cluster, one_worker, tmp_path):
     address, _ = cluster
     ref, _ = one_worker
@@ -214,19 +218,20 @@ def test_an_interrupted_sweep_resumes_from_the_cases_it_wrote(cluster, one_worke
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        sweep(_spec(), tmp_path, scheduler=address, progress=interrupt)
+        run_sweep(_spec(), tmp_path, scheduler=address, progress=interrupt)
     written = len(list((tmp_path / PARTS_DIR).glob("part-*.npz")))
     assert written >= 2 and not (tmp_path / "results.csv").exists()
     resumed = []
-    result = sweep(_spec(), tmp_path, scheduler=address, resume=True, progress=resumed.append, plots=False)
+    result = run_sweep(_spec(), tmp_path, scheduler=address, resume=True, progress=resumed.append, plots=False)
     assert sum(resumed) == 24 - 3 * written  # only the cases not written before ran
     assert result.table.equals(ref.table)
     with pytest.raises(SweepSpecError, match="holds the cases of another spec"):
         (tmp_path / PARTS_DIR).mkdir()
         (tmp_path / PARTS_DIR / "spec.json").write_text(json.dumps({"digest": "other"}))
-        sweep(_spec(), tmp_path, scheduler=address, resume=True, plots=False)
+        run_sweep(_spec(), tmp_path, scheduler=address, resume=True, plots=False)
 
 
+@pytest.mark.cluster
 def test_a_worker_killed_mid_sweep_loses_no_case_and_counts_none_twice(cluster, tmp_path):
     address, workers = cluster
     spec = _spec(samples=120)  # 40 tasks of 3 cases: most are still to run when the first one reports
@@ -237,7 +242,7 @@ def test_a_worker_killed_mid_sweep_loses_no_case_and_counts_none_twice(cluster, 
         if len(counted) == 1:
             os.kill(workers[0].pid, signal.SIGKILL)
 
-    result = sweep(spec, tmp_path, scheduler=address, progress=kill_first, plots=False)
+    result = run_sweep(spec, tmp_path, scheduler=address, progress=kill_first, plots=False)
     assert workers[0].wait(timeout=10) == -signal.SIGKILL
     assert len(counted) == 40 and sum(counted) == 120  # every task reported once
     assert list(result.table["case"]) == list(range(120))
@@ -259,6 +264,7 @@ def test_the_readme_spec_is_a_valid_spec():
     assert spec.n_cases == 1000 and spec.quantities == ("payload_mass", "friction_scale", "link_mass_scale")
 
 
+@pytest.mark.cluster
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGKILL], ids=["ctrl-c", "kill-9"])
 def test_a_stopped_manip_sweep_leaves_nothing_running_or_listening(tmp_path, stop):
     """Stopped mid-sweep, by Ctrl-C (exit status 130, one line) or killed outright (no ``finally`` runs: the
@@ -268,9 +274,11 @@ def test_a_stopped_manip_sweep_leaves_nothing_running_or_listening(tmp_path, sto
     spec = tmp_path / "spec.toml"
     spec.write_text('robot = "scara"\ncontroller = "pd"\nsamples = 400\nbatch = 2\n[vary]\npayload_mass = [0, 3]\n')
     out, err_log = tmp_path / "out", tmp_path / "stderr.txt"
+    env, mark = marked_env()  # every process of the command's tree, orphans included, carries the mark
     with open(err_log, "w") as fe:
         proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", "sweep", str(spec), "--out", str(out),
-                                 "--workers", "2", "--no-plots"], stdout=subprocess.DEVNULL, stderr=fe, text=True)
+                                 "--workers", "2", "--no-plots"], stdout=subprocess.DEVNULL, stderr=fe, text=True,
+                                env=env, preexec_fn=interruptible)
         root = psutil.Process(proc.pid)
         pids, ports = {proc.pid}, set()
         deadline = time.monotonic() + 180
@@ -284,6 +292,8 @@ def test_a_stopped_manip_sweep_leaves_nothing_running_or_listening(tmp_path, sto
                     assert ipaddress.ip_address(c.laddr.ip).is_loopback, c
             time.sleep(0.1)
         assert proc.poll() is None, err_log.read_text()  # still sweeping
+        # negative control of the final check: the mark finds the command's tree and its listeners now
+        assert proc.pid in alive(mark) and len(alive(mark)) >= 3 and listening_ports(mark)
         proc.send_signal(stop)
         proc.wait(timeout=60)
     err = err_log.read_text()
@@ -294,15 +304,12 @@ def test_a_stopped_manip_sweep_leaves_nothing_running_or_listening(tmp_path, sto
         assert proc.returncode == -signal.SIGKILL, err
     assert len(pids) >= 3 and len(ports) >= 3  # the command, its scheduler and two workers were seen
 
-    def alive() -> list[int]:
-        return [p for p in pids if psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE]
-
     deadline = time.monotonic() + 30  # an orphaned worker checks its parent about once a second
-    while alive() and time.monotonic() < deadline:
+    while alive(mark) and time.monotonic() < deadline:
         time.sleep(0.2)
-    assert not alive()
-    listening = {c.laddr.port for c in psutil.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN}
-    assert not (ports & listening)
+    # the command's own tree only (the machine's other programs may reuse a port): no process, no listener
+    assert not alive(mark)
+    assert not listening_ports(mark)
     assert (out / PARTS_DIR).is_dir() and not (out / "results.csv").exists()  # kept for --resume
 
 

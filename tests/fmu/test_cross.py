@@ -16,8 +16,9 @@ with its default ``--platforms`` (everything zig builds). The C test driver
 * macOS cannot be run here: both slices of the universal ``darwin64`` binary
   are checked structurally (Mach-O, machine, exported symbols, libraries).
 
-Tests that run a binary skip only when wine or qemu-aarch64 (or its sysroot) is
-missing; ``tools/system-packages`` installs them, so CI runs them all.
+Tests that run a binary need wine or qemu-aarch64 (and its sysroot), the structural checks
+llvm-objdump: without them they are skipped, naming the tool (:mod:`tests.support.system_tools`);
+``tools/system-packages`` installs them, and CI (``MANIP_REQUIRE_ALL=1``) runs them all.
 Cold, the cross builds cost minutes once per machine (zig builds each target's C
 runtime into its cache); warm, about 10 s.
 """
@@ -25,7 +26,6 @@ runtime into its cache); warm, about 10 s.
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 import sys
 import zipfile
@@ -40,9 +40,10 @@ from fmu.build import build_driver
 from fmu.platforms import PLATFORMS, host_platform, platform_folder
 
 from tests.support.fmu_support import build_root
+from tests.support.system_tools import AARCH64_SYSROOT, require
 
+pytestmark = pytest.mark.cross
 BY_NAME = {p.name: p for p in PLATFORMS}
-SYSROOT = Path("/usr/aarch64-linux-gnu")  # Debian's libc6-arm64-cross
 TOL = 1e-12
 STEPS = 200
 REPEATS = 3
@@ -91,17 +92,11 @@ def _run(name: str, folder: Path, mode: str, count: int, tmp_path: Path) -> subp
     if target.runner == "native":
         prefix: list[str] = []
     elif target.runner == "wine":
-        wine = shutil.which("wine64") or shutil.which("wine")
-        if wine is None:
-            pytest.skip("wine is not installed (tools/system-packages installs it)")
-        prefix = [wine]
+        prefix = [require("wine")]
         # one prefix for the session: wine's first start in a new prefix costs about 10 s here
         env.update(WINEDEBUG="-all", WINEPREFIX=str(build_root() / "cross" / "wineprefix"))
     elif target.runner == "qemu-aarch64":
-        qemu = shutil.which("qemu-aarch64")
-        if qemu is None or not (SYSROOT / "lib" / "ld-linux-aarch64.so.1").is_file():
-            pytest.skip("qemu-aarch64 or the aarch64 glibc (libc6-arm64-cross) is not installed")
-        prefix = [qemu, "-L", str(SYSROOT)]
+        prefix = [require("qemu-aarch64"), "-L", str(AARCH64_SYSROOT)]
     else:
         raise AssertionError(f"{name}: not runnable here")
     return subprocess.run([*prefix, str(_driver(name)), *args], capture_output=True, text=True, env=env, timeout=300)
@@ -154,10 +149,10 @@ def test_one_fmu_carries_five_platforms_in_fmi2_folders(cross_export):
     assert len(binaries) == 4
 
 
+@pytest.mark.needs("llvm-objdump")
 @pytest.mark.parametrize("name", list(BY_NAME))
 def test_each_binary_exports_the_fmi_functions_and_needs_only_the_c_runtime(cross_export, name):
     tool = objdump()
-    assert tool is not None, "llvm-objdump is required (tools/system-packages installs llvm)"
     _, _, folder = cross_export
     reference = check_binary(folder / "binaries/linux64/scara.so", BY_NAME["x86_64-linux"], tool)
     found = check_binary(folder / "binaries" / platform_folder(name, 2) / f"scara{BY_NAME[name].suffix}",
@@ -167,6 +162,7 @@ def test_each_binary_exports_the_fmi_functions_and_needs_only_the_c_runtime(cros
     assert found.imports
 
 
+@pytest.mark.needs("llvm-objdump")
 def test_darwin64_is_one_universal_binary_of_both_macs(cross_export):
     """Read by llvm-objdump's own Mach-O reader: the fat header written by fmu.cross.write_universal."""
     _, _, folder = cross_export
@@ -175,6 +171,7 @@ def test_darwin64_is_one_universal_binary_of_both_macs(cross_export):
     assert "nfat_arch 2" in out and "CPU_TYPE_X86_64" in out and "CPU_TYPE_ARM64" in out
 
 
+@pytest.mark.needs("llvm-objdump")
 def test_the_structural_check_catches_a_wrong_machine_and_a_thin_file(cross_export, tmp_path):
     """Negative controls: the x86_64 ELF read as aarch64, a thin Mach-O read as a universal one's arm64 slice."""
     _, _, folder = cross_export
@@ -191,6 +188,7 @@ def test_the_structural_check_catches_a_wrong_machine_and_a_thin_file(cross_expo
     assert "no arm64 slice" in check_binary(thin, BY_NAME["aarch64-darwin"], tool).problems[0]
 
 
+@pytest.mark.needs("llvm-objdump")
 def test_validate_fmu_lists_the_platforms_and_checks_them(cross_export):
     from fmu.validate import binary_problems
 
@@ -253,6 +251,7 @@ def _extra_source(folder: Path) -> Path:
     return source
 
 
+@pytest.mark.needs("llvm-objdump")
 @pytest.mark.parametrize("name", ["x86_64-windows", "aarch64-darwin", "aarch64-linux"])
 def test_compile_shared_builds_any_sources_and_the_check_sees_an_extra_export(cross_export, name, tmp_path):
     """fmu.cross.compile_shared on other sources (as an FMI 3.0 build calls it); negative control: a helper
@@ -288,6 +287,7 @@ def test_without_zig_the_default_is_the_hosts_binary_and_one_line_says_why(tmp_p
     assert not (tmp_path / "w.fmu").exists()
 
 
+@pytest.mark.needs("llvm-objdump")
 def test_place_binaries_uses_each_fmi_versions_folders(cross_export, tmp_path):
     """FMI 2.0: both Macs in one universal darwin64 binary; FMI 3.0: one thin binary per platform tuple."""
     from fmu.cross import place_binaries
@@ -308,6 +308,7 @@ def test_place_binaries_uses_each_fmi_versions_folders(cross_export, tmp_path):
         assert "no " in check_binary(three[mac.name], macs[1 - macs.index(mac)], objdump()).problems[0]
 
 
+@pytest.mark.needs("llvm-objdump")
 def test_the_validation_report_prints_the_platforms(cross_export):
     from fmu.validate import ValidationReport, binary_problems
 
@@ -318,6 +319,8 @@ def test_the_validation_report_prints_the_platforms(cross_export):
             "aarch64-linux)") in text
 
 
+@pytest.mark.fmi3
+@pytest.mark.needs("llvm-objdump")
 def test_an_fmi3_fmu_carries_every_platform_in_its_own_folders(tmp_path):
     """FMI 3.0 puts each binary in its platform tuple's folder; each exports only ``fmi3`` functions."""
     from fmu.build import export_fmu

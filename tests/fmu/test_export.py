@@ -19,6 +19,7 @@ from fmu.validate import binary_problems, fmu_robot, model_description_problems
 from fmu.variables import build_table, derivative_unit, parse_unit, spec_from_plant, trivial_spec
 from model import InertiaConsistencyWarning, load_robot
 from model.plant import build_plant
+from model.version import __version__
 
 from tests.support.fmu_support import build_root, heavy_scara_fmu, planar2r_full_fmu, scara_fmu, trivial_fmu
 
@@ -123,6 +124,13 @@ def test_spec_rejects_a_step_below_the_minimum_declared_in_the_xml():
     assert float(xml.find("Real").get("min")) == MIN_STEP
 
 
+def test_the_fmi3_description_names_no_fmi2_function(scara_table):
+    """One table renders both versions: its words must hold for both (internal_step said "per fmi2DoStep")."""
+    text = scara_table.model_description_fmi3("{guid}", [], "0")
+    assert "internal_step" in text and "per DoStep call" in text  # negative control: the description is there
+    assert "fmi2" not in text.lower()
+
+
 # ------------------------------------------------------ description and binary
 
 def test_fmpy_validation_has_zero_problems():
@@ -144,6 +152,7 @@ def test_model_description_capabilities_and_experiment():
     assert root.find("CoSimulation").get("canHandleVariableCommunicationStepSize") == "true"
     assert root.find("DefaultExperiment").get("stepSize") == "0.001"
     assert root.get("variableNamingConvention") == "structured"
+    assert root.get("generationTool") == f"manipulator-workbench {__version__}"  # the one version
     assert {u.get("name") for u in root.find("UnitDefinitions")} >= {"rad", "m", "N.m", "kg.m2", "rad/s2"}
     assert fmu_robot(scara_fmu()) == ("scara", "reflected")
     assert fmu_robot(trivial_fmu()) is None
@@ -182,6 +191,7 @@ def test_value_references_agree_between_header_and_xml():
     assert macros == xml
 
 
+@pytest.mark.needs("cmake")
 def test_rebuild_from_sources_with_fmpy_gives_the_same_results(tmp_path):
     """FMPy's `compile` path (CMake on sources/) rebuilds a binary that simulates identically."""
     from fmpy import extract

@@ -27,7 +27,9 @@ import pytest
 
 from tests.support.fmu_support import _quiet, build_root
 
-ROBOTS = ("scara", "puma560", "panda")
+pytestmark = pytest.mark.fmi3
+#: The 6- and 7-joint arms take most of this module's time: they are in the full suite only (make test).
+ROBOTS = ("scara", pytest.param("puma560", marks=pytest.mark.slow), pytest.param("panda", marks=pytest.mark.slow))
 T_END, H = 0.5, 0.01
 CS_RTOL = 1e-12
 ME_RTOL = 1e-10
@@ -354,7 +356,8 @@ def test_cli_exports_and_validates_an_fmi3_fmu(tmp_path):
 
     manip = Path(sys.executable).with_name("manip")
     out = tmp_path / "scara3.fmu"
-    proc = subprocess.run([str(manip), "export-fmu", "scara", "-o", str(out), "--fmi-version", "3"],
+    # the host's binary only: the cross-platform FMI 3.0 export is tests/fmu/test_cross.py's (zig: minutes cold)
+    proc = subprocess.run([str(manip), "export-fmu", "scara", "-o", str(out), "--fmi-version", "3", "--platforms", "host"],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert _md(out).fmiVersion == "3.0"
@@ -367,6 +370,8 @@ def test_cli_exports_and_validates_an_fmi3_fmu(tmp_path):
     assert proc.returncode == 2 and "--fmi-version" in proc.stderr
 
 
+@pytest.mark.valgrind
+@pytest.mark.needs("valgrind")
 def test_fmi3_lifecycle_under_valgrind():
     """fmu/c/fmu3_driver.c runs 20 repetitions of a CS and an ME lifecycle of the SCARA FMU (about 10 s)."""
     import re
@@ -386,9 +391,7 @@ def test_fmi3_lifecycle_under_valgrind():
             *[str(_vr(md, nm)) for nm in ("q", "qd", "tau_m", "der(q)")], "4"]
     proc = subprocess.run(args, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    valgrind = shutil.which("valgrind")
-    assert valgrind is not None, "valgrind is required for this test (apt-get install valgrind)"
-    proc = subprocess.run([valgrind, "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
+    proc = subprocess.run([shutil.which("valgrind"), "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
                            "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=1", *args],
                           capture_output=True, text=True, timeout=300)
     report = proc.stderr
@@ -467,6 +470,7 @@ def test_fmi3_pid_controller_fmu_ticks_its_integrator(tmp_path):
         me.instantiate()
 
 
+@pytest.mark.needs("cmake")
 def test_fmi3_source_fmu_rebuilds_with_fmpy(tmp_path):
     """FMPy's CMake build of sources/ (buildDescription.xml) gives a binary that simulates identically."""
     import shutil

@@ -63,7 +63,7 @@ def test_the_scenario_sticks_and_slips():
     assert np.all((ref.F[stuck, 0] >= tc_neg[0] - 1e-9) & (ref.F[stuck, 0] <= tc_pos[0] + 1e-9))
 
 
-@pytest.mark.parametrize("interface", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("interface", [pytest.param("ModelExchange", marks=pytest.mark.slow), "CoSimulation"])
 def test_puma_with_real_friction_matches_the_stick_slip_reference(interface, tmp_path):
     robot, profile, ref = scenario()
     table = step_input(TAU, profile.t_switch, profile.tau_m)

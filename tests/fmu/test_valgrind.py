@@ -44,10 +44,10 @@ def test_driver_runs_cleanly_without_valgrind(driver):
     assert f"soak: {REPEATS} repetitions, 0 failures" in proc.stdout
 
 
+@pytest.mark.valgrind
+@pytest.mark.needs("valgrind")
 def test_valgrind_reports_no_errors_and_no_leaks(driver):
-    valgrind = shutil.which("valgrind")
-    assert valgrind is not None, "valgrind is required for this test (apt-get install valgrind)"
-    proc = subprocess.run([valgrind, "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
+    proc = subprocess.run([shutil.which("valgrind"), "--leak-check=full", "--show-leak-kinds=definite,indirect,possible",
                            "--errors-for-leak-kinds=definite,indirect,possible", "--error-exitcode=1",
                            *_driver_args(driver)], capture_output=True, text=True, timeout=300)
     report = proc.stderr

@@ -82,6 +82,7 @@ def test_validate_the_puma_560_with_default_settings():
     _assert_valid(validate_fmu(puma_fmu(), with_cosim=False))
 
 
+@pytest.mark.slow
 def test_validate_a_7_joint_arm_from_the_fmu_alone(capsys):
     from workbench.cli import main
 
@@ -101,6 +102,7 @@ def test_validate_a_7_joint_arm_from_the_fmu_alone(capsys):
     assert "ok   Model Exchange qd:" in out and "result: OK" in out
 
 
+@pytest.mark.slow
 def test_the_fmu_names_no_path_of_the_build_machine():
     path, toml = arm7_fmu()
     forbidden = {str(toml.parent), str(toml.parent.resolve()), os.getcwd(), str(Path(fmu.__file__).resolve().parents[1]),
@@ -113,6 +115,7 @@ def test_the_fmu_names_no_path_of_the_build_machine():
                 assert text.encode() not in data, f"{name} contains {text}"
 
 
+@pytest.mark.slow
 def test_an_edited_robot_resource_is_refused(tmp_path):
     """The embedded description must match the digest recorded at export: an edited resource is not used."""
     path, _ = arm7_fmu()

@@ -191,6 +191,7 @@ def test_every_function_gets_its_own_unit_with_a_size_chosen_optimisation(tmp_pa
     _close(library.evaluate("big", [np.array([0.1, 0.2, 0.3])], 1)[0][0], np.array(big([0.1, 0.2, 0.3])).ravel(), 1e-14)
 
 
+@pytest.mark.slow
 def test_a_12_joint_chain_builds_and_matches_pinocchio():
     """Cold build of all six Functions of a 12-joint random chain; tolerance as tests/model/test_dynamics_pinocchio.py.
 

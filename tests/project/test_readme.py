@@ -72,6 +72,7 @@ def test_console_commands_are_there():
     assert any(expected == 2 for _, expected in console_commands())
 
 
+@pytest.mark.slow
 def test_every_console_command_exits_as_the_readme_says(tour):
     _, results = tour
     for argv, expected, status, err in results:
@@ -81,6 +82,7 @@ def test_every_console_command_exits_as_the_readme_says(tour):
             assert len(lines) == 1 and lines[0].startswith(f"manip {argv[0]}: error: "), err
 
 
+@pytest.mark.slow
 def test_demo_writes_the_report_with_every_section(tour):
     folder, _ = tour
     out = folder / "out"
@@ -101,6 +103,7 @@ def test_demo_writes_the_report_with_every_section(tour):
     assert (out / "scara.fmu").is_file() and (out / "metrics.json").is_file()
 
 
+@pytest.mark.slow
 def test_design_and_track_tour_outputs(tour):
     folder, _ = tour
     import json
@@ -112,6 +115,7 @@ def test_design_and_track_tour_outputs(tour):
     assert len(metrics["max_error"]) == 4
 
 
+@pytest.mark.slow
 def test_python_blocks_run(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     codes = [code for code, _ in blocks("python")]

@@ -20,7 +20,7 @@ def is_png(path) -> bool:
     return path.is_file() and path.read_bytes()[:8] == PNG_MAGIC
 
 
-@pytest.mark.parametrize("controller", ["pd", "ct"])
+@pytest.mark.parametrize("controller", ["pd", pytest.param("ct", marks=pytest.mark.slow)])
 def test_design_writes_json_and_plots(tmp_path, capsys, controller):
     out = tmp_path / "design"
     assert main(["design", "scara", "--controller", controller, "--bandwidth", "40", "--rate", "1000", "--out", str(out)]) == 0

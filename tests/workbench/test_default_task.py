@@ -51,7 +51,7 @@ def test_a_robot_with_tasks_is_tracked_on_its_first_and_an_explicit_task_says_no
 
 
 def test_a_sweep_spec_without_a_task_follows_the_same_rule_and_says_so(tmp_path):
-    from closed_loop.sweep import sweep
+    from closed_loop.sweep import run_sweep
     from closed_loop.sweep_spec import spec_from_dict
 
     arm = tmp_path / "arm.toml"
@@ -59,6 +59,6 @@ def test_a_sweep_spec_without_a_task_follows_the_same_rule_and_says_so(tmp_path)
     stream = io.StringIO()
     spec = spec_from_dict({"robot": str(arm), "controller": "pd", "samples": 2, "seed": 1,
                            "vary": {"payload_mass": [0.0, 1.0]}})
-    result = sweep(spec, workers=1, plots=False, stream=stream)
+    result = run_sweep(spec, workers=1, plots=False, stream=stream)
     assert "sweep: no task in the spec: following 'first' (the first [[tasks]] entry" in stream.getvalue()
     assert len(result.table) == 2

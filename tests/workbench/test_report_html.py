@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import html.parser
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -19,16 +18,16 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from tests.support.system_tools import require
+
 REPO = Path(__file__).resolve().parents[2]
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--hide-scrollbars"]
 
 
 def screenshot(page: Path, png: Path, size: str = "1280,4000") -> Image.Image:
     """Render ``page`` with headless Chromium into ``png`` (the flags of the project's brief)."""
-    assert Path(CHROMIUM).is_file(), f"chromium not found at {CHROMIUM}: run tools/system-packages"
-    res = subprocess.run([CHROMIUM, *FLAGS, f"--screenshot={png}", f"--window-size={size}", page.resolve().as_uri()],
+    res = subprocess.run([require("chromium"), *FLAGS, f"--screenshot={png}", f"--window-size={size}", page.resolve().as_uri()],
                          capture_output=True, text=True, timeout=120)
     assert png.is_file(), res.stderr[-2000:]
     return Image.open(png).convert("RGB")
@@ -73,6 +72,9 @@ def demo(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
+@pytest.mark.browser
+@pytest.mark.needs("chromium")
 def test_report_renders_to_a_page_that_is_not_blank(demo, tmp_path):
     shot = screenshot(demo / "report.html", tmp_path / "report.png")
     assert shot.size == (1280, 4000)
@@ -85,6 +87,7 @@ def test_report_renders_to_a_page_that_is_not_blank(demo, tmp_path):
     assert ink(screenshot(empty, tmp_path / "empty.png", "400,300")) < 0.001
 
 
+@pytest.mark.slow
 def test_report_html_has_none_of_the_reported_defects(demo):
     page = (demo / "report.html").read_text()
     parsed = _Page()
@@ -106,6 +109,7 @@ def test_report_html_has_none_of_the_reported_defects(demo):
     assert not (demo / "cosim").exists()
 
 
+@pytest.mark.slow
 def test_report_tables_give_each_number_column_one_format(demo):
     """RMS errors from 1e-7 to 4e-3 in one column: all in scientific notation, not half fixed-point."""
     md = (demo / "report.md").read_text().splitlines()

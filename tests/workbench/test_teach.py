@@ -10,7 +10,6 @@ start is ~0.3 s; the panda's and ur5's kinematics take the rest), plus one
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 import pytest
@@ -21,7 +20,6 @@ from workbench.replay import Replay, ReplayError, load_replay, save_replay
 from workbench.teach import (
     DisplayUnits,
     NEAR_SINGULAR_TOL,
-    TeachPage,
     format_pose,
     is_loopback,
     joint_frames,

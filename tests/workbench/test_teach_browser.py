@@ -6,7 +6,8 @@ joint sliders with the keyboard (as a user does: arrow keys on the slider
 thumb, one step each), reads the slider values and the tool pose the page
 displays, and the test compares that pose with ``fkine`` of those slider
 values. psutil lists the server's sockets: every one is on a loopback address,
-and none is left after Ctrl-C, SIGTERM or a kill.
+and none is left after Ctrl-C, SIGTERM or a kill (looked for among the command's own processes, marked
+through their environment: :mod:`tests.support.process_tree`; other programs may reuse the port).
 
 Cost: about 15 s on an idle 2-core machine (Chromium start ~1 s, page load ~4 s, each key
 press a round trip through the server, each ``manip teach`` start ~2 s); under a load of 10
@@ -16,9 +17,7 @@ the browser test alone takes ~40 s.
 from __future__ import annotations
 
 import ipaddress
-import os
 import re
-import shutil
 import signal
 import socket
 import subprocess
@@ -32,27 +31,27 @@ import pytest
 from model.description import rpy_matrix
 from model.robot import load_robot
 
+from tests.support.process_tree import alive, interruptible, listening_ports, marked_env
+from tests.support.system_tools import require
+
 REPO = Path(__file__).resolve().parents[2]
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-CHROMEDRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
 URL = re.compile(r"at (http://127\.0\.0\.1:(\d+)/)")
 
 psutil = pytest.importorskip("psutil", reason="psutil is in the test extra")
-selenium = pytest.importorskip("selenium", reason="selenium is in the test extra")
-# CI installs both (tools/system-packages): there a missing browser fails instead of skipping.
-pytestmark = pytest.mark.skipif(not (os.path.exists(CHROMIUM) and os.path.exists(CHROMEDRIVER)) and not os.environ.get("CI"),
-                                reason="needs Debian's chromium and chromium-driver (tools/system-packages installs them)")
 
 
-def _start(*argv: str) -> tuple[subprocess.Popen, str, int]:
+def _start(*argv: str) -> tuple[subprocess.Popen, str, int, str]:
+    """``manip teach ... --no-browser`` started with a mark (:func:`marked_env`); the process, URL, port, mark."""
+    env, mark = marked_env()
     proc = subprocess.Popen([sys.executable, "-m", "workbench.cli", "teach", *argv, "--no-browser"], cwd=REPO,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=interruptible)
     line = proc.stdout.readline()  # the address line, printed once the server listens
     match = URL.search(line)
     if match is None:
         proc.kill()
         raise AssertionError(f"no address line from manip teach: {line!r} {proc.stderr.read()!r}")
-    return proc, match.group(1), int(match.group(2))
+    return proc, match.group(1), int(match.group(2)), mark
 
 
 def _sockets(pid: int) -> list:
@@ -69,9 +68,22 @@ def _assert_loopback_only(pid: int, port: int) -> None:
             assert ipaddress.ip_address(c.raddr.ip).is_loopback, f"connection to a remote address: {c}"
 
 
-def _port_free(port: int) -> bool:
-    with socket.socket() as s:
-        return s.connect_ex(("127.0.0.1", port)) != 0
+def _communicate(proc: subprocess.Popen) -> tuple[str, str]:
+    """Its output once it ends; one that does not end within 20 s is killed (no server left behind) and fails."""
+    try:
+        return proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise AssertionError("manip teach did not stop within 20 s of the signal; killed") from None
+
+
+def _left_listening(mark: str) -> set[int]:
+    """The ports the command's own processes still listen on, once they are given 20 s to end."""
+    deadline = time.monotonic() + 20
+    while alive(mark) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return listening_ports(mark)
 
 
 def _browser(tmp_path: Path):
@@ -79,12 +91,12 @@ def _browser(tmp_path: Path):
     from selenium.webdriver.chrome.service import Service
 
     opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
+    opts.binary_location = require("chromium")
     for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync", "--no-first-run", "--window-size=1100,750",
                  f"--user-data-dir={tmp_path / 'chromium-profile'}"):
         opts.add_argument(flag)
-    return webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    return webdriver.Chrome(service=Service(require("chromedriver")), options=opts)
 
 
 def _wait(predicate, timeout: float, what: str):
@@ -109,12 +121,16 @@ def _shown_pose(driver) -> np.ndarray | None:
         return None
 
 
+@pytest.mark.slow
+@pytest.mark.browser
+@pytest.mark.needs("chromium", "chromedriver")
 def test_slider_moves_the_pose_the_page_shows_equals_fkine(tmp_path):
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
 
+    pytest.importorskip("selenium", reason="selenium is in the test extra")
     robot = load_robot("scara")
-    proc, url, port = _start("scara")
+    proc, url, port, mark = _start("scara")
     driver = None
     try:
         _assert_loopback_only(proc.pid, port)
@@ -156,10 +172,10 @@ def test_slider_moves_the_pose_the_page_shows_equals_fkine(tmp_path):
         if driver is not None:
             driver.quit()
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=20)
+        out, err = _communicate(proc)
     assert proc.returncode == 0, err
     assert "stopped" in err
-    assert _port_free(port)
+    assert _left_listening(mark) == set()
 
 
 def _assert_not_blank(png: Path) -> None:
@@ -175,12 +191,13 @@ def _assert_not_blank(png: Path) -> None:
 
 @pytest.mark.parametrize("how", ["SIGTERM", "SIGKILL"])
 def test_nothing_listens_after_the_command_ends(how):
-    proc, _, port = _start("planar2r")
+    proc, _, port, mark = _start("planar2r")
     _assert_loopback_only(proc.pid, port)
+    assert listening_ports(mark) == {port}  # negative control: the mark finds the server's listener
     proc.send_signal(getattr(signal, how))
-    proc.communicate(timeout=20)
+    _communicate(proc)
     assert proc.returncode == (0 if how == "SIGTERM" else -signal.SIGKILL)
-    assert _port_free(port)
+    assert _left_listening(mark) == set()
 
 
 def _manip(*argv: str) -> subprocess.CompletedProcess:
