@@ -50,7 +50,8 @@ __all__ = [
 ]
 
 #: The keys a ``[joints.NAME]`` table may hold: the motor keys of a ``[[links]]`` table, and its source.
-MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source")
+MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source",
+              "velocity_limit", "acceleration_limit")
 _MOVING = ("revolute", "continuous", "prismatic")
 _REFUSED = {
     "floating": "a floating joint (6 degrees of freedom) is not a serial-arm joint",

@@ -1,0 +1,346 @@
+"""The result of a retime: the time law on every segment, evaluable at any time, and its checks.
+
+On stage i of a segment (grid points ``s_i`` to ``s_{i+1}``) the path acceleration ``sdd_i`` is constant,
+so the stage lasts ``h_i = 2 (s_{i+1} - s_i) / (sd_i + sd_{i+1})`` and, ``tau`` seconds into it,
+``s = s_i + sd_i tau + sdd_i tau^2 / 2``, ``sd = sd_i + sdd_i tau``; then ``qd = q'(s) sd`` and
+``qdd = q'(s) sdd + q''(s) sd^2`` exactly. Segments follow each other, the arm at rest between them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..trajectory import Trajectory, _readonly
+from .limits import RetimeLimits
+from .path import RetimePath
+from .solver import PathConstraints, SegmentSolution
+
+__all__ = ["Retiming", "GridCheck", "DEFAULT_SAMPLE_STEP"]
+
+Array = npt.NDArray[np.float64]
+
+#: Default sampling period of a retimed trajectory (its CSV and its tracking reference), s.
+DEFAULT_SAMPLE_STEP = 1e-3
+
+
+@dataclass(frozen=True)
+class GridCheck:
+    """The worst use of each limit over the grid points (collocation states ``(sd_i, sdd_i)``), as a ratio.
+
+    ``torque`` is ``max |tau_j| / tau_max_j`` (the margin-reduced joint-side bound), ``velocity`` and
+    ``acceleration`` likewise (0 where no joint has one); 1 means at the limit. ``joint`` names the joint
+    (0-based) of the torque maximum and ``s`` where it is.
+    """
+
+    torque: float
+    velocity: float
+    acceleration: float
+    torque_joint: int
+    torque_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"torque": self.torque, "velocity": self.velocity, "acceleration": self.acceleration,
+                "torque_joint": self.torque_joint + 1, "torque_s": self.torque_s}
+
+
+@dataclass(frozen=True, eq=False)
+class Retiming:
+    """A time-optimal motion along a path within limits (from :func:`model.retime.retime`).
+
+    Attributes
+    ----------
+    robot
+        Name of the robot.
+    path
+        The geometric path.
+    limits
+        The limits kept.
+    segments
+        One :class:`~model.retime.solver.SegmentSolution` per path segment.
+    constraints
+        The constraints of each segment on its grid.
+    solve_time
+        Wall time of the solver (constraints and both passes), s.
+    """
+
+    robot: str
+    path: RetimePath
+    limits: RetimeLimits
+    segments: tuple[SegmentSolution, ...]
+    constraints: tuple[PathConstraints, ...]
+    solve_time: float
+
+    def __post_init__(self) -> None:
+        starts, s0, y0, u, h, seg = [], [], [], [], [], []
+        t = 0.0
+        bounds = [0.0]
+        for k, sol in enumerate(self.segments):
+            times = sol.stage_times
+            offsets = t + np.concatenate([[0.0], np.cumsum(times)])
+            starts.append(offsets[:-1])
+            s0.append(sol.s[:-1])
+            y0.append(sol.sd[:-1])
+            u.append(sol.sdd)
+            h.append(times)
+            seg.append(np.full(times.size, k))
+            t = float(offsets[-1])
+            bounds.append(t)
+        object.__setattr__(self, "_stage", tuple(_readonly(np.concatenate(a)) for a in (starts, s0, y0, u, h)))
+        object.__setattr__(self, "_segment_of", np.concatenate(seg))
+        object.__setattr__(self, "_bounds", _readonly(np.array(bounds)))
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.path.n
+
+    @property
+    def duration(self) -> float:
+        """Duration of the whole motion, s."""
+        return float(self._bounds[-1])  # type: ignore[attr-defined]
+
+    @property
+    def segment_times(self) -> Array:
+        """(segments + 1,) times at which each segment starts, and the end, s."""
+        return self._bounds  # type: ignore[attr-defined]
+
+    @property
+    def grid_times(self) -> list[Array]:
+        """Per segment, the (N+1,) times at its grid points, s."""
+        out = []
+        for k, sol in enumerate(self.segments):
+            out.append(self._bounds[k] + np.concatenate([[0.0], np.cumsum(sol.stage_times)]))  # type: ignore[attr-defined]
+        return out
+
+    def batch(self, t: npt.ArrayLike) -> tuple[Array, Array, Array]:
+        """Joint positions, velocities and accelerations at the (T,) times ``t`` (s), each (T, n).
+
+        Before the start and after the end the arm rests at the first and last waypoint.
+        """
+        tt = np.asarray(t, dtype=float)
+        start, s0, y0, u, h = self._stage  # type: ignore[attr-defined]
+        idx = np.clip(np.searchsorted(start, tt, side="right") - 1, 0, start.size - 1)
+        tau = np.clip(tt - start[idx], 0.0, h[idx])
+        s = s0[idx] + y0[idx] * tau + 0.5 * u[idx] * tau * tau
+        sd = y0[idx] + u[idx] * tau
+        sdd = u[idx].copy()
+        outside = (tt < 0.0) | (tt > self.duration)
+        sd[outside] = 0.0
+        sdd[outside] = 0.0
+        seg = self._segment_of[idx]  # type: ignore[attr-defined]
+        Q = np.empty((tt.size, self.n))
+        QD = np.empty_like(Q)
+        QDD = np.empty_like(Q)
+        for k in np.unique(seg):
+            m = seg == k
+            path = self.path.segments[int(k)]
+            sk = np.clip(s[m], path.t_start, path.t_end)
+            q, dq, ddq = path.batch(sk)
+            Q[m] = q
+            QD[m] = dq * sd[m, None]
+            QDD[m] = dq * sdd[m, None] + ddq * (sd[m] ** 2)[:, None]
+        return Q, QD, QDD
+
+    def trajectory(self, dt: float = DEFAULT_SAMPLE_STEP) -> Trajectory:
+        """The motion sampled on a uniform grid of step at most ``dt`` (s) that ends exactly at :attr:`duration`.
+
+        Its ``path`` is the quintic Hermite through those samples (:func:`model.trajectory_file.sampled_trajectory`),
+        the same that ``manip track --trajectory`` builds from the CSV of these samples.
+        """
+        from ..trajectory_file import sampled_trajectory
+
+        T = self.duration
+        m = max(1, math.ceil(T / dt - 1e-9))
+        t = np.arange(m + 1) * (T / m)
+        t[-1] = T
+        q, qd, qdd = self.batch(t)
+        return sampled_trajectory(t, q, qd, qdd, name="retime", t_via=self.segment_times,
+                                  q_via=self.path.waypoints if self.path.kind == "straight"
+                                  else self.path.waypoints[[0, -1]])
+
+    def grid_states(self, k: int, end: bool = False) -> tuple[Array, Array, Array, Array]:
+        """Segment k's states at its grid points, each stage's acceleration held: (N, n) q, qd, qdd and (N,) s.
+
+        ``end=False``: the state where each stage starts, ``(sd_i, sdd_i)`` at ``s_i`` (i = 0..N-1);
+        ``end=True``: where it ends, ``(sd_{i+1}, sdd_i)`` at ``s_{i+1}``. The retime keeps both within the limits.
+        """
+        pc, sol = self.constraints[k], self.segments[k]
+        at = slice(1, None) if end else slice(0, -1)
+        y, u = sol.sd[at], sol.sdd
+        return pc.q[at], pc.dq[at] * y[:, None], pc.dq[at] * u[:, None] + pc.ddq[at] * (y * y)[:, None], pc.s[at]
+
+    def check(self) -> GridCheck:
+        """The worst use of each limit over every grid point, both one-sided accelerations (see :class:`GridCheck`)."""
+        torque, joint, where, acc, vel = 0.0, 0, 0.0, 0.0, 0.0
+        for pc, sol in zip(self.constraints, self.segments):
+            for at in (slice(0, -1), slice(1, None)):
+                y, u = sol.sd[at], sol.sdd
+                vals = (pc.alpha[at] * u[:, None] + pc.beta[at] * (y * y)[:, None] + pc.gamma[at] * y[:, None]
+                        + pc.delta[at])
+                ratio = np.abs(vals) / pc.hi[at]
+                for r, (kind, j) in enumerate(pc.rows):
+                    i = int(np.argmax(ratio[:, r]))
+                    if kind == "torque" and ratio[i, r] > torque:
+                        torque, joint, where = float(ratio[i, r]), j, float(pc.s[at][i])
+                    elif kind == "acceleration":
+                        acc = max(acc, float(ratio[i, r]))
+            vel = max(vel, float(np.max(np.abs(pc.dq * sol.sd[:, None]) / self.limits.velocity)))
+        return GridCheck(torque=torque, velocity=vel, acceleration=acc, torque_joint=joint, torque_s=where)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"torque": self.torque, "velocity": self.velocity, "acceleration": self.acceleration,
+                "torque_joint": self.torque_joint + 1, "torque_s": self.torque_s}
+
+
+@dataclass(frozen=True, eq=False)
+class Retiming:
+    """A time-optimal motion along a path within limits (from :func:`model.retime.retime`).
+
+    Attributes
+    ----------
+    robot
+        Name of the robot.
+    path
+        The geometric path.
+    limits
+        The limits kept.
+    segments
+        One :class:`~model.retime.solver.SegmentSolution` per path segment.
+    constraints
+        The constraints of each segment on its grid.
+    solve_time
+        Wall time of the solver (constraints and both passes), s.
+    """
+
+    robot: str
+    path: RetimePath
+    limits: RetimeLimits
+    segments: tuple[SegmentSolution, ...]
+    constraints: tuple[PathConstraints, ...]
+    solve_time: float
+
+    def __post_init__(self) -> None:
+        starts, s0, y0, u, h, seg = [], [], [], [], [], []
+        t = 0.0
+        bounds = [0.0]
+        for k, sol in enumerate(self.segments):
+            times = sol.stage_times
+            offsets = t + np.concatenate([[0.0], np.cumsum(times)])
+            starts.append(offsets[:-1])
+            s0.append(sol.s[:-1])
+            y0.append(sol.sd[:-1])
+            u.append(sol.sdd)
+            h.append(times)
+            seg.append(np.full(times.size, k))
+            t = float(offsets[-1])
+            bounds.append(t)
+        object.__setattr__(self, "_stage", tuple(_readonly(np.concatenate(a)) for a in (starts, s0, y0, u, h)))
+        object.__setattr__(self, "_segment_of", np.concatenate(seg))
+        object.__setattr__(self, "_bounds", _readonly(np.array(bounds)))
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.path.n
+
+    @property
+    def duration(self) -> float:
+        """Duration of the whole motion, s."""
+        return float(self._bounds[-1])  # type: ignore[attr-defined]
+
+    @property
+    def segment_times(self) -> Array:
+        """(segments + 1,) times at which each segment starts, and the end, s."""
+        return self._bounds  # type: ignore[attr-defined]
+
+    @property
+    def grid_times(self) -> list[Array]:
+        """Per segment, the (N+1,) times at its grid points, s."""
+        out = []
+        for k, sol in enumerate(self.segments):
+            out.append(self._bounds[k] + np.concatenate([[0.0], np.cumsum(sol.stage_times)]))  # type: ignore[attr-defined]
+        return out
+
+    def batch(self, t: npt.ArrayLike) -> tuple[Array, Array, Array]:
+        """Joint positions, velocities and accelerations at the (T,) times ``t`` (s), each (T, n).
+
+        Before the start and after the end the arm rests at the first and last waypoint.
+        """
+        tt = np.asarray(t, dtype=float)
+        start, s0, y0, u, h = self._stage  # type: ignore[attr-defined]
+        idx = np.clip(np.searchsorted(start, tt, side="right") - 1, 0, start.size - 1)
+        tau = np.clip(tt - start[idx], 0.0, h[idx])
+        s = s0[idx] + y0[idx] * tau + 0.5 * u[idx] * tau * tau
+        sd = y0[idx] + u[idx] * tau
+        sdd = u[idx].copy()
+        outside = (tt < 0.0) | (tt > self.duration)
+        sd[outside] = 0.0
+        sdd[outside] = 0.0
+        seg = self._segment_of[idx]  # type: ignore[attr-defined]
+        Q = np.empty((tt.size, self.n))
+        QD = np.empty_like(Q)
+        QDD = np.empty_like(Q)
+        for k in np.unique(seg):
+            m = seg == k
+            path = self.path.segments[int(k)]
+            sk = np.clip(s[m], path.t_start, path.t_end)
+            q, dq, ddq = path.batch(sk)
+            Q[m] = q
+            QD[m] = dq * sd[m, None]
+            QDD[m] = dq * sdd[m, None] + ddq * (sd[m] ** 2)[:, None]
+        return Q, QD, QDD
+
+    def trajectory(self, dt: float = DEFAULT_SAMPLE_STEP) -> Trajectory:
+        """The motion sampled on a uniform grid of step at most ``dt`` (s) that ends exactly at :attr:`duration`.
+
+        Its ``path`` is the quintic Hermite through those samples (:func:`model.trajectory_file.sampled_trajectory`),
+        the same that ``manip track --trajectory`` builds from the CSV of these samples.
+        """
+        from ..trajectory_file import sampled_trajectory
+
+        T = self.duration
+        m = max(1, math.ceil(T / dt - 1e-9))
+        t = np.arange(m + 1) * (T / m)
+        t[-1] = T
+        q, qd, qdd = self.batch(t)
+        return sampled_trajectory(t, q, qd, qdd, name="retime", t_via=self.segment_times,
+                                  q_via=self.path.waypoints if self.path.kind == "straight"
+                                  else self.path.waypoints[[0, -1]])
+
+    def grid_states(self, k: int) -> tuple[Array, Array, Array, Array]:
+        """Segment k's collocation states: (N, n) q, qd, qdd at grid points 0..N-1 and (N,) their s."""
+        pc, sol = self.constraints[k], self.segments[k]
+        y, u = sol.sd[:-1], sol.sdd
+        return pc.q[:-1], pc.dq[:-1] * y[:, None], pc.dq[:-1] * u[:, None] + pc.ddq[:-1] * (y * y)[:, None], pc.s[:-1]
+
+    def check(self) -> GridCheck:
+        """The worst use of each limit over every grid point (see :class:`GridCheck`)."""
+        worst = {"torque": (0.0, 0, 0.0), "velocity": 0.0, "acceleration": 0.0}
+        for pc, sol in zip(self.constraints, self.segments):
+            u = np.concatenate([sol.sdd, [sol.sdd[-1]]])
+            vals = pc.values(sol.sd, u)[:-1]
+            for r, (kind, j) in enumerate(pc.rows):
+                ratio = np.abs(vals[:, r]) / pc.hi[:-1, r]
+                i = int(np.argmax(ratio))
+                if kind == "torque":
+                    if ratio[i] > worst["torque"][0]:
+                        worst["torque"] = (float(ratio[i]), j, float(pc.s[i]))
+                elif ratio[i] > worst["acceleration"]:
+                    worst["acceleration"] = float(ratio[i])
+            vel = np.abs(pc.dq * sol.sd[:, None]) / self.limits.velocity
+            worst["velocity"] = max(worst["velocity"], float(np.max(vel)))
+        tq = worst["torque"]
+        return GridCheck(torque=tq[0], velocity=worst["velocity"], acceleration=worst["acceleration"],  # type: ignore
+                         torque_joint=tq[1], torque_s=tq[2])
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: duration, path, grid, limits and the worst use of each."""
+        return {"robot": self.robot, "duration_s": self.duration, "path": self.path.kind,
+                "waypoints": self.path.waypoints.tolist(), "segment_times_s": self.segment_times.tolist(),
+                "grid_points": int(sum(sol.s.size for sol in self.segments)), "solve_time_s": self.solve_time,
+                "limits": self.limits.to_dict(), "grid_check": self.check().to_dict()}
