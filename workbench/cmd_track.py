@@ -1,7 +1,7 @@
 """``manip track``: closed-loop tracking of a task on the nonlinear model, from the command line.
 
-``manip track ROBOT --controller KIND [--task pick-and-place | --waypoints FILE] [--segment-time S] [--rate HZ]
-[--payload KG] --out DIR`` simulates the closed loop on the nonlinear model and
+``manip track ROBOT --controller KIND [--task pick-and-place | --waypoints FILE | --trajectory FILE.csv]
+[--segment-time S] [--rate HZ] [--payload KG] --out DIR`` simulates the closed loop on the nonlinear model and
 writes ``DIR/metrics.json`` and ``DIR/tracking_error.png``, ``DIR/torques.png``,
 ``DIR/joints.png``, and ``DIR/tracking.npz`` (t, q, q_ref: the run that
 ``manip teach ROBOT --result DIR`` plays); progress goes to stderr. With a plant/model mismatch
@@ -61,7 +61,14 @@ def run_track(args: argparse.Namespace) -> int:
         raise DesignSpecError(f"--payload: expected a mass >= 0 kg, got {args.payload!r}")
     check_out_dir(args.out)
     robot = load_robot(args.robot)
-    traj = task_trajectory(robot, args.task, args.waypoints, args.segment_time)
+    if args.trajectory is not None:  # a trajectory file (manip retime, manip excite): its samples as they are
+        from model.trajectory_file import read_trajectory
+
+        if args.segment_time is not None:
+            raise DesignSpecError("--segment-time: a --trajectory file carries its own times; give one or the other")
+        traj = read_trajectory(args.trajectory, robot.description)
+    else:
+        traj = task_trajectory(robot, args.task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate,
                           analyse=False)
@@ -74,7 +81,7 @@ def run_track(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     data = met.to_dict()
     data.update({
-        "task": str(args.waypoints) if args.waypoints else args.task, "duration_s": float(result.t[-1] - result.t[0]),
+        "task": str(args.trajectory or args.waypoints or args.task), "duration_s": float(result.t[-1] - result.t[0]),
         "bandwidth_rad_s": args.bandwidth, "damping": design.damping, "phase_margin_deg": args.phase_margin,
         "plant": mismatch.describe(), "payload_kg": mismatch.payload_mass,
         "tau_m_max": None if result.tau_m_max is None else result.tau_m_max.tolist(), "substeps": result.substeps,
@@ -125,6 +132,8 @@ def register(subparsers: Any, full: bool = True) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--task", default="pick-and-place", help="built-in task (default pick-and-place)")
     src.add_argument("--waypoints", default=None, metavar="FILE", help="TOML or CSV joint waypoint file")
+    src.add_argument("--trajectory", default=None, metavar="FILE.csv",
+                     help="trajectory file: time, q_<joint>.., qd_<joint>.., qdd_<joint>.. (manip retime, manip excite)")
     p.add_argument("--segment-time", type=float, default=None, metavar="S", help="duration of every segment, s (default 3)")
     p.add_argument("--payload", type=float, default=None, metavar="KG",
                    help="payload on the simulated arm only (unknown to the controller), kg")

@@ -20,12 +20,16 @@ from .limits import RetimeLimits
 from .path import RetimePath
 from .solver import PathConstraints, SegmentSolution
 
-__all__ = ["Retiming", "GridCheck", "DEFAULT_SAMPLE_STEP"]
+__all__ = ["Retiming", "GridCheck", "DEFAULT_SAMPLE_STEP", "JUMP_STEP"]
 
 Array = npt.NDArray[np.float64]
 
 #: Default sampling period of a retimed trajectory (its CSV and its tracking reference), s.
 DEFAULT_SAMPLE_STEP = 1e-3
+#: Time between a segment boundary's sample and the next one, s: the acceleration jumps in between. Far below
+#: any control period (a closed loop reads the reference at most every 0.1 ms here), far above the rounding
+#: of a time of hours (1e-12 s).
+JUMP_STEP = 1e-6
 
 
 @dataclass(frozen=True)
@@ -146,19 +150,42 @@ class Retiming:
             QDD[m] = dq * sdd[m, None] + ddq * (sd[m] ** 2)[:, None]
         return Q, QD, QDD
 
+    def sample_times(self, dt: float = DEFAULT_SAMPLE_STEP) -> Array:
+        """Sample times: each segment on its own uniform grid of step at most ``dt`` (s), its start and end included.
+
+        The arm is at rest at a segment boundary and its acceleration jumps there (from braking along one
+        segment to accelerating along the next): the boundary is a sample, and so is the instant
+        :data:`JUMP_STEP` after it, so that the jump falls between two samples that far apart (one acceleration
+        per sample cannot hold both sides of it).
+        """
+        b = self.segment_times
+        parts = [np.array([b[0]])]
+        for k in range(b.size - 1):
+            T = float(b[k + 1] - b[k])
+            m = max(1, math.ceil(T / dt - 1e-9))
+            t = b[k] + np.arange(1, m + 1) * (T / m)
+            t[-1] = b[k + 1]
+            if k:
+                parts.append(np.array([b[k] + JUMP_STEP]))
+            parts.append(t)
+        return np.concatenate(parts)
+
     def trajectory(self, dt: float = DEFAULT_SAMPLE_STEP) -> Trajectory:
-        """The motion sampled on a uniform grid of step at most ``dt`` (s) that ends exactly at :attr:`duration`.
+        """The motion sampled at :meth:`sample_times` (step at most ``dt``, s), as a Trajectory.
 
         Its ``path`` is the quintic Hermite through those samples (:func:`model.trajectory_file.sampled_trajectory`),
-        the same that ``manip track --trajectory`` builds from the CSV of these samples.
+        the same that ``manip track --trajectory`` builds from the CSV of these samples. A segment boundary's
+        sample holds the acceleration of the segment that ends there, the sample :data:`JUMP_STEP` later that
+        of the one that starts.
         """
         from ..trajectory_file import sampled_trajectory
 
-        T = self.duration
-        m = max(1, math.ceil(T / dt - 1e-9))
-        t = np.arange(m + 1) * (T / m)
-        t[-1] = T
+        t = self.sample_times(dt)
         q, qd, qdd = self.batch(t)
+        for k in range(1, len(self.segments)):
+            i = int(np.searchsorted(t, self.segment_times[k]))
+            qd[i] = 0.0
+            qdd[i] = self.constraints[k - 1].dq[-1] * self.segments[k - 1].sdd[-1]
         return sampled_trajectory(t, q, qd, qdd, name="retime", t_via=self.segment_times,
                                   q_via=self.path.waypoints if self.path.kind == "straight"
                                   else self.path.waypoints[[0, -1]])
@@ -191,152 +218,6 @@ class Retiming:
                         acc = max(acc, float(ratio[i, r]))
             vel = max(vel, float(np.max(np.abs(pc.dq * sol.sd[:, None]) / self.limits.velocity)))
         return GridCheck(torque=torque, velocity=vel, acceleration=acc, torque_joint=joint, torque_s=where)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"torque": self.torque, "velocity": self.velocity, "acceleration": self.acceleration,
-                "torque_joint": self.torque_joint + 1, "torque_s": self.torque_s}
-
-
-@dataclass(frozen=True, eq=False)
-class Retiming:
-    """A time-optimal motion along a path within limits (from :func:`model.retime.retime`).
-
-    Attributes
-    ----------
-    robot
-        Name of the robot.
-    path
-        The geometric path.
-    limits
-        The limits kept.
-    segments
-        One :class:`~model.retime.solver.SegmentSolution` per path segment.
-    constraints
-        The constraints of each segment on its grid.
-    solve_time
-        Wall time of the solver (constraints and both passes), s.
-    """
-
-    robot: str
-    path: RetimePath
-    limits: RetimeLimits
-    segments: tuple[SegmentSolution, ...]
-    constraints: tuple[PathConstraints, ...]
-    solve_time: float
-
-    def __post_init__(self) -> None:
-        starts, s0, y0, u, h, seg = [], [], [], [], [], []
-        t = 0.0
-        bounds = [0.0]
-        for k, sol in enumerate(self.segments):
-            times = sol.stage_times
-            offsets = t + np.concatenate([[0.0], np.cumsum(times)])
-            starts.append(offsets[:-1])
-            s0.append(sol.s[:-1])
-            y0.append(sol.sd[:-1])
-            u.append(sol.sdd)
-            h.append(times)
-            seg.append(np.full(times.size, k))
-            t = float(offsets[-1])
-            bounds.append(t)
-        object.__setattr__(self, "_stage", tuple(_readonly(np.concatenate(a)) for a in (starts, s0, y0, u, h)))
-        object.__setattr__(self, "_segment_of", np.concatenate(seg))
-        object.__setattr__(self, "_bounds", _readonly(np.array(bounds)))
-
-    @property
-    def n(self) -> int:
-        """Number of joints."""
-        return self.path.n
-
-    @property
-    def duration(self) -> float:
-        """Duration of the whole motion, s."""
-        return float(self._bounds[-1])  # type: ignore[attr-defined]
-
-    @property
-    def segment_times(self) -> Array:
-        """(segments + 1,) times at which each segment starts, and the end, s."""
-        return self._bounds  # type: ignore[attr-defined]
-
-    @property
-    def grid_times(self) -> list[Array]:
-        """Per segment, the (N+1,) times at its grid points, s."""
-        out = []
-        for k, sol in enumerate(self.segments):
-            out.append(self._bounds[k] + np.concatenate([[0.0], np.cumsum(sol.stage_times)]))  # type: ignore[attr-defined]
-        return out
-
-    def batch(self, t: npt.ArrayLike) -> tuple[Array, Array, Array]:
-        """Joint positions, velocities and accelerations at the (T,) times ``t`` (s), each (T, n).
-
-        Before the start and after the end the arm rests at the first and last waypoint.
-        """
-        tt = np.asarray(t, dtype=float)
-        start, s0, y0, u, h = self._stage  # type: ignore[attr-defined]
-        idx = np.clip(np.searchsorted(start, tt, side="right") - 1, 0, start.size - 1)
-        tau = np.clip(tt - start[idx], 0.0, h[idx])
-        s = s0[idx] + y0[idx] * tau + 0.5 * u[idx] * tau * tau
-        sd = y0[idx] + u[idx] * tau
-        sdd = u[idx].copy()
-        outside = (tt < 0.0) | (tt > self.duration)
-        sd[outside] = 0.0
-        sdd[outside] = 0.0
-        seg = self._segment_of[idx]  # type: ignore[attr-defined]
-        Q = np.empty((tt.size, self.n))
-        QD = np.empty_like(Q)
-        QDD = np.empty_like(Q)
-        for k in np.unique(seg):
-            m = seg == k
-            path = self.path.segments[int(k)]
-            sk = np.clip(s[m], path.t_start, path.t_end)
-            q, dq, ddq = path.batch(sk)
-            Q[m] = q
-            QD[m] = dq * sd[m, None]
-            QDD[m] = dq * sdd[m, None] + ddq * (sd[m] ** 2)[:, None]
-        return Q, QD, QDD
-
-    def trajectory(self, dt: float = DEFAULT_SAMPLE_STEP) -> Trajectory:
-        """The motion sampled on a uniform grid of step at most ``dt`` (s) that ends exactly at :attr:`duration`.
-
-        Its ``path`` is the quintic Hermite through those samples (:func:`model.trajectory_file.sampled_trajectory`),
-        the same that ``manip track --trajectory`` builds from the CSV of these samples.
-        """
-        from ..trajectory_file import sampled_trajectory
-
-        T = self.duration
-        m = max(1, math.ceil(T / dt - 1e-9))
-        t = np.arange(m + 1) * (T / m)
-        t[-1] = T
-        q, qd, qdd = self.batch(t)
-        return sampled_trajectory(t, q, qd, qdd, name="retime", t_via=self.segment_times,
-                                  q_via=self.path.waypoints if self.path.kind == "straight"
-                                  else self.path.waypoints[[0, -1]])
-
-    def grid_states(self, k: int) -> tuple[Array, Array, Array, Array]:
-        """Segment k's collocation states: (N, n) q, qd, qdd at grid points 0..N-1 and (N,) their s."""
-        pc, sol = self.constraints[k], self.segments[k]
-        y, u = sol.sd[:-1], sol.sdd
-        return pc.q[:-1], pc.dq[:-1] * y[:, None], pc.dq[:-1] * u[:, None] + pc.ddq[:-1] * (y * y)[:, None], pc.s[:-1]
-
-    def check(self) -> GridCheck:
-        """The worst use of each limit over every grid point (see :class:`GridCheck`)."""
-        worst = {"torque": (0.0, 0, 0.0), "velocity": 0.0, "acceleration": 0.0}
-        for pc, sol in zip(self.constraints, self.segments):
-            u = np.concatenate([sol.sdd, [sol.sdd[-1]]])
-            vals = pc.values(sol.sd, u)[:-1]
-            for r, (kind, j) in enumerate(pc.rows):
-                ratio = np.abs(vals[:, r]) / pc.hi[:-1, r]
-                i = int(np.argmax(ratio))
-                if kind == "torque":
-                    if ratio[i] > worst["torque"][0]:
-                        worst["torque"] = (float(ratio[i]), j, float(pc.s[i]))
-                elif ratio[i] > worst["acceleration"]:
-                    worst["acceleration"] = float(ratio[i])
-            vel = np.abs(pc.dq * sol.sd[:, None]) / self.limits.velocity
-            worst["velocity"] = max(worst["velocity"], float(np.max(vel)))
-        tq = worst["torque"]
-        return GridCheck(torque=tq[0], velocity=worst["velocity"], acceleration=worst["acceleration"],  # type: ignore
-                         torque_joint=tq[1], torque_s=tq[2])
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: duration, path, grid, limits and the worst use of each."""
