@@ -21,9 +21,11 @@ The method, on a grid ``s_0 .. s_N`` with ``x = sd^2`` and ``u = sdd`` constant 
   It is bounded soundly by lines: above by a tangent of ``sqrt`` (valid for every x), below by chords (valid
   on ``[0, X]``, the stage's x kept within X). The first pass without viscous friction is exact and sizes
   ``X`` (twice its controllable top, within the maximal velocity curve) and the first tangent point; the
-  pass with the lines gives a feasible motion; one more pass with lines exact at that motion's own x (tangent
-  and chord node there) keeps it feasible and can only shorten it. Measured on the SCARA's pick-and-place:
-  the second refinement changes the duration by 4e-7 relative, the first by 3e-3.
+  pass with the lines gives a feasible motion; each further pass, with lines exact at the previous motion's own
+  x (tangent and chord node there), keeps it feasible and can only shorten it, until one gains less than
+  :data:`REFINE_RTOL`. Measured against a direct IPOPT transcription with the viscous term exact (planar2r,
+  whose joints have 100 N m s/rad): 2.7e-2 longer after the first pass, 3.7e-5 after one refinement, 2e-10
+  after two; on the SCARA's pick-and-place the refinements gain 3e-3, then 4e-7.
 * The backward pass computes the controllable sets ``K_i`` (eliminating u pairwise between the rows:
   Fourier-Motzkin on each stage's 2-D polygon), the forward pass takes the largest u that keeps ``K_{i+1}``
   reachable. Without viscous friction this is the discretised problem toppra solves with
@@ -51,10 +53,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from .limits import RetimeLimits
 
 __all__ = ["PathConstraints", "SegmentSolution", "RetimeInfeasibleError", "path_constraints", "solve_segment",
-           "Y_CAP"]
+           "REFINE_RTOL", "Y_CAP"]
 
 Array = npt.NDArray[np.float64]
 
+#: The refinement passes stop once one shortens the motion by less than this share.
+REFINE_RTOL = 1e-7
 #: Largest path speed considered, per second: the top of the search range where nothing else bounds sd.
 Y_CAP = 1e8
 #: A row whose ``a`` is below this fraction of its largest ``|a|`` along the segment is a pure sd-constraint there.
@@ -474,7 +478,7 @@ def _describe(pc: PathConstraints, i: int) -> str:
     return text
 
 
-def solve_segment(pc: PathConstraints, refine: int = 1) -> SegmentSolution:
+def solve_segment(pc: PathConstraints, refine: int = 4) -> SegmentSolution:
     """The time-optimal law on one segment from rest to rest (TOPP-RA; see the module docstring).
 
     Parameters
@@ -482,9 +486,10 @@ def solve_segment(pc: PathConstraints, refine: int = 1) -> SegmentSolution:
     pc
         The segment's constraints on its grid.
     refine
-        Passes after the first that bound the viscous terms again, by lines exact at the previous pass's
-        solution (each pass keeps the previous solution feasible, so the duration never grows); none without
-        viscous friction, where one pass is exact.
+        Most passes after the first that bound the viscous terms again, by lines exact at the previous pass's
+        solution (each pass keeps the previous solution feasible, so the duration never grows); they stop
+        once a pass shortens the motion by less than :data:`REFINE_RTOL`. None without viscous friction,
+        where one pass is exact.
 
     Raises
     ------
@@ -516,10 +521,15 @@ def solve_segment(pc: PathConstraints, refine: int = 1) -> SegmentSolution:
         # above it) within the maximal velocity curve; tangent at that top, then at each pass's solution.
         X = np.minimum(mvc, 2.0 * K[:, 1])
         x, K = _pass(pc, pc.gamma, X, K[:, 1].copy())
+        T = _duration(s, x)
         for _ in range(refine):
             x_new, K_new = _pass(pc, pc.gamma, X, np.minimum(x, X))
-            if _duration(s, x_new) <= _duration(s, x):
+            T_new = _duration(s, x_new)
+            if T_new <= T:
                 x, K = x_new, K_new
+            if T - T_new <= REFINE_RTOL * T:
+                break
+            T = min(T, T_new)
     sd = np.sqrt(x)
     sdd = np.diff(x) / (2.0 * np.diff(s))
     if np.any(sd[:-1] + sd[1:] <= 0.0):
