@@ -125,7 +125,7 @@ def read_trajectory(path: str | Path, description: "RobotDescription") -> Trajec
     out = (q < lo - slack) | (q > hi + slack)
     if np.any(out):
         k, j = np.argwhere(out)[0]
-        raise TrajectoryFileError(f"{where} line {k + 2}: q_{description.joint_names[j]} = {q[k, j]!r} outside "
+        raise TrajectoryFileError(f"{where} line {k + 2}: q_{description.joint_names[j]} = {float(q[k, j])!r} outside "
                                   f"qlim [{lo[j]:g}, {hi[j]:g}] of joint {j + 1}")
     vmax = np.array([math.inf if lk.velocity_limit is None else lk.velocity_limit for lk in description.links])
     fast = np.abs(qd) > vmax * (1.0 + _LIMIT_RTOL)
@@ -133,7 +133,7 @@ def read_trajectory(path: str | Path, description: "RobotDescription") -> Trajec
         k, j = np.argwhere(fast)[0]
         state = "the start" if k == 0 else "a sample"
         raise TrajectoryFileError(f"{where} line {k + 2}: {state} is too fast: qd_{description.joint_names[j]} = "
-                                  f"{qd[k, j]!r} above velocity_limit {vmax[j]:g} of joint {j + 1}")
+                                  f"{float(qd[k, j])!r} above velocity_limit {vmax[j]:g} of joint {j + 1}")
     check_consistency(t, q, qd, qdd, where)
     return sampled_trajectory(t, q, qd, qdd, name=f"trajectory file {Path(path).name}")
 
