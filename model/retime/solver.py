@@ -323,24 +323,35 @@ def _one_sided(alpha: Array, beta: Array, gamma: Array, delta: Array, lo: Array,
                shift: Array | None = None) -> tuple[Array, Array, Array]:
     """Rows ``lo <= alpha u + beta x + gamma sqrt(x) + delta <= hi`` (M, R) as one-sided linear rows ``a u + b x <= c``.
 
-    ``sqrt`` is replaced by :func:`_lines` (sound on ``[0, X]``). With ``shift`` (M,) the rows hold at the end
-    of a stage, ``x' = x + 2 delta u`` (``shift = 2 delta``), and are written in the stage's own (u, x). Each row
-    is scaled by ``1 / hi`` (its bounds are ``+-hi``). Returns ``a, b, c`` (M, 4R).
+    ``sqrt`` is replaced by :func:`_lines` (sound on ``[0, X]``) in the rows with a viscous term somewhere (four
+    one-sided rows each: two sides, two lines); the others are exact (two one-sided rows each). With ``shift``
+    (M,) the rows hold at the end of a stage, ``x' = x + 2 delta u`` (``shift = 2 delta``), and are written in
+    the stage's own (u, x). Each row is scaled by ``1 / hi`` (its bounds are ``+-hi``). Returns ``a, b, c``.
     """
-    m_hi, c_hi, m_lo, c_lo = _lines(gamma, x0, X)
-    scale = (1.0 / hi)[..., None]
-    a, b, d = alpha[..., None], beta[..., None], delta[..., None]
-    bh, bl = b + m_hi, b + m_lo
-    ah, al = np.broadcast_to(a, bh.shape), np.broadcast_to(a, bl.shape)
-    if shift is not None:
-        ah = a + shift[:, None, None] * bh
-        al = a + shift[:, None, None] * bl
-    A = np.concatenate([ah * scale, -al * scale], axis=-1)
-    B = np.concatenate([bh * scale, -bl * scale], axis=-1)
-    C = np.concatenate([np.broadcast_to((hi[..., None] - d - c_hi) * scale, bh.shape),
-                        np.broadcast_to((d + c_lo - lo[..., None]) * scale, bl.shape)], axis=-1)
     M = alpha.shape[0]
-    return A.reshape(M, -1), B.reshape(M, -1), C.reshape(M, -1)
+    wet = np.any(gamma != 0.0, axis=0)
+    parts = []
+    for rows, lines in ((~wet, False), (wet, True)):
+        if not rows.any():
+            continue
+        g = gamma[:, rows]
+        if lines:
+            m_hi, c_hi, m_lo, c_lo = _lines(g, x0, X)
+        else:
+            m_hi = c_hi = m_lo = c_lo = np.zeros(g.shape + (1,))
+        scale = (1.0 / hi[:, rows])[..., None]
+        a, b, d = alpha[:, rows, None], beta[:, rows, None], delta[:, rows, None]
+        bh, bl = b + m_hi, b + m_lo
+        ah, al = np.broadcast_to(a, bh.shape), np.broadcast_to(a, bl.shape)
+        if shift is not None:
+            ah = a + shift[:, None, None] * bh
+            al = a + shift[:, None, None] * bl
+        parts.append((np.concatenate([ah * scale, -al * scale], axis=-1).reshape(M, -1),
+                      np.concatenate([bh * scale, -bl * scale], axis=-1).reshape(M, -1),
+                      np.concatenate([np.broadcast_to((hi[:, rows, None] - d - c_hi) * scale, bh.shape),
+                                      np.broadcast_to((d + c_lo - lo[:, rows, None]) * scale, bl.shape)],
+                                     axis=-1).reshape(M, -1)))
+    return tuple(np.hstack([p[k] for p in parts]) for k in range(3))  # type: ignore[return-value]
 
 
 def _static(A: Array, B: Array, C: Array, top: Array) -> tuple[Array, Array]:
@@ -501,25 +512,35 @@ def solve_segment(pc: PathConstraints, refine: int = 4) -> SegmentSolution:
     N = s.size - 1
     if N < 1:
         raise InputError(f"grid: expected at least 2 points, got {s.size}")
-    L, U, P, _pure = _bounds(pc)
-    P = P[:, np.isfinite(P[..., 2]).any(axis=0)]  # only the rows that are u-free somewhere
-    # The admissible set of each point on its own, exactly (its top is the maximal velocity curve).
-    y_lo, y_hi = np.empty(N + 1), np.empty(N + 1)
-    chunk = max(1, 200_000 // max(1, L.shape[1] * U.shape[1] * L.shape[1]))
-    for a in range(0, N + 1, chunk):
-        b = min(N + 1, a + chunk)
-        y_lo[a:b], y_hi[a:b] = _pieces(L[a:b], U[a:b], P[a:b], pc.y_max[a:b])
+    viscous = bool(np.any(pc.gamma != 0.0))
+    zero = np.zeros_like(pc.gamma)
+    ones = np.ones(N + 1)
+    # The admissible set of each point on its own (its top is the maximal velocity curve): without viscous
+    # friction the rows are linear in x and the pairwise elimination is exact; with it, the roots of the
+    # quadratics in sd (exact too, costlier).
+    a, b, c = _one_sided(pc.alpha, pc.beta, zero, pc.delta, pc.lo, pc.hi, ones, ones)
+    x_lo, x_hi = _static(a, b, c, pc.y_max ** 2)
+    if viscous:
+        L, U, P, _pure = _bounds(pc)
+        P = P[:, np.isfinite(P[..., 2]).any(axis=0)]  # only the rows that are u-free somewhere
+        y_lo, y_hi = np.empty(N + 1), np.empty(N + 1)
+        chunk = max(1, 200_000 // max(1, L.shape[1] * U.shape[1] * L.shape[1]))
+        for a0 in range(0, N + 1, chunk):
+            b0 = min(N + 1, a0 + chunk)
+            y_lo[a0:b0], y_hi[a0:b0] = _pieces(L[a0:b0], U[a0:b0], P[a0:b0], pc.y_max[a0:b0])
+    else:
+        y_lo, y_hi = np.sqrt(x_lo), np.sqrt(x_hi)
     bad = np.flatnonzero(np.isnan(y_lo))
     if bad.size:
         i = int(bad[0])
         raise RetimeInfeasibleError(f"retime: no state at s = {s[i]:.6g} (q = {np.round(pc.q[i], 6).tolist()}) is "
                                     f"within the limits: {_describe(pc, i)}")
-    mvc = y_hi ** 2
-    x, K = _pass(pc, np.zeros_like(pc.gamma), mvc, mvc)  # exact without viscous friction
-    if np.any(pc.gamma != 0.0):
+    mvc = np.where(np.isnan(x_hi), 0.0, x_hi)
+    x, K = _pass(pc, zero, mvc, mvc)  # exact without viscous friction
+    if viscous:
         # With it: the lines bound sqrt(x) on [0, X], X twice the frictionless controllable top (a speed 41 %
         # above it) within the maximal velocity curve; tangent at that top, then at each pass's solution.
-        X = np.minimum(mvc, 2.0 * K[:, 1])
+        X = np.minimum(y_hi ** 2, 2.0 * K[:, 1])
         x, K = _pass(pc, pc.gamma, X, K[:, 1].copy())
         T = _duration(s, x)
         for _ in range(refine):
