@@ -1,7 +1,7 @@
 """``manip retime``: the fastest motion along a task's path within the motor torque, speed and acceleration limits.
 
 ``manip retime ROBOT [--task T | --waypoints F] [--blend] [--torque-margin 0.9] [--velocity-limit V]
-[--acceleration-limit A] [--velocity-scale X] [--acceleration-scale X] [--grid N] [--dt S] --out DIR``
+[--acceleration-limit A] [--velocity-scale X] [--acceleration-scale X] [--grid N] [--dt S] [--smooth S] --out DIR``
 writes ``DIR/trajectory.csv`` (time, q, qd, qdd per joint, SI; ``manip track ROBOT --trajectory`` follows it),
 ``DIR/retime.json`` (duration, limits and where they come from, the worst use of each) and ``DIR/retime.png``
 (path speed against its limit curve, torques against their limits). The motor torque limits are those
@@ -15,6 +15,8 @@ import argparse
 import math
 import sys
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from .args import UsageError, add_no_plots, bounded_int
 from .outputs import check_out_dir, out_dir, save_figure, write_json
@@ -89,6 +91,8 @@ def run_retime(args: argparse.Namespace) -> int:
         raise UsageError(f"--torque-margin: expected a share of the motor torque limits in (0, 1], got {args.torque_margin!r}")
     if not (math.isfinite(args.dt) and 0.0 < args.dt <= 0.1):
         raise UsageError(f"--dt: expected a sampling period in (0, 0.1] s, got {args.dt!r}")
+    if not (math.isfinite(args.smooth) and 0.0 <= args.smooth <= 0.1):
+        raise UsageError(f"--smooth: expected a window in [0, 0.1] s, got {args.smooth!r}")
     _factor(args.velocity_scale, "--velocity-scale")
     _factor(args.acceleration_scale, "--acceleration-scale")
     check_out_dir(args.out)
@@ -102,15 +106,17 @@ def run_retime(args: argparse.Namespace) -> int:
     motion = retime_task(robot, task, blend=args.blend, torque_margin=args.torque_margin, velocity_limit=velocity,
                          acceleration_limit=acceleration, velocity_scale=args.velocity_scale,
                          acceleration_scale=args.acceleration_scale, grid=args.grid)
-    traj = motion.trajectory(args.dt)
+    traj = motion.trajectory(args.dt, smooth=args.smooth)
     out = out_dir(args.out)
     write_trajectory(out / TRAJECTORY_FILE, traj, robot.description.joint_names)
     planned = task.n_segments * task.segment_time
     check = motion.check()
     data = motion.to_dict()
+    file_use = float(np.max(np.abs(robot.rne_batch(traj.q, traj.qd, traj.qdd)) / motion.limits.tau_max))
     data.update({"task": str(args.waypoints) if args.waypoints else task.name, "planned_duration_s": planned,
-                 "speed_up": planned / motion.duration, "sample_step_s": float(traj.t[1] - traj.t[0]),
-                 "samples": int(traj.t.size)})
+                 "speed_up": planned / motion.duration, "file": TRAJECTORY_FILE, "file_duration_s": float(traj.t[-1]),
+                 "smooth_s": args.smooth, "sample_step_s": float(np.max(np.diff(traj.t))), "samples": int(traj.t.size),
+                 "file_torque_use": file_use})
     write_json(out / "retime.json", data)
     if not args.no_plots:
         from .retime_plots import retime_figure
@@ -119,12 +125,15 @@ def run_retime(args: argparse.Namespace) -> int:
     print(f"{robot.name}: {task.name} retimed from {planned:g} s ({task.n_segments} x {task.segment_time:g} s as "
           f"planned) to {motion.duration:.4g} s ({planned / motion.duration:.3g} x faster), solved in "
           f"{motion.solve_time:.2f} s")
-    print(f"most used: {100 * check.torque:.6g} % of the torque bound ({100 * args.torque_margin:g} % of motor "
-          f"{check.torque_joint + 1}'s limit)"
+    print(f"at the grid points, at most {100 * check.torque:.6g} % of the torque bound ({100 * args.torque_margin:g} % "
+          f"of the motor limits; motor {check.torque_joint + 1})"
           + (f", {100 * check.velocity:.4g} % of a velocity limit" if check.velocity > 0 else "")
           + (f", {100 * check.acceleration:.4g} % of an acceleration limit" if check.acceleration > 0 else ""))
+    if args.smooth > 0.0:
+        print(f"{TRAJECTORY_FILE}: the law averaged over {args.smooth:g} s (ramps where it switches; "
+              f"{traj.t[-1]:.4g} s), its torques at most {100 * file_use:.4g} % of the bound")
     plots = " (--no-plots: no PNG)" if args.no_plots else f" and {out / 'retime.png'}"
-    print(f"wrote {out / TRAJECTORY_FILE} ({traj.t.size} samples every {traj.t[1] - traj.t[0]:.6g} s; "
+    print(f"wrote {out / TRAJECTORY_FILE} ({traj.t.size} samples, at most {np.max(np.diff(traj.t)):.6g} s apart; "
           f"manip track {args.robot} --trajectory {out / TRAJECTORY_FILE}), {out / 'retime.json'}{plots}")
     return 0
 
@@ -155,6 +164,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--grid", type=bounded_int(10, 100_000, "a number of grid intervals"), default=1000, metavar="N",
                    help="grid intervals along the path (default 1000)")
     p.add_argument("--dt", type=float, default=1e-3, metavar="S", help="sampling period of trajectory.csv, s (default 0.001)")
+    p.add_argument("--smooth", type=float, default=1e-3, metavar="S",
+                   help="average the time law over S s in trajectory.csv, so that a loop sampled every S s follows its "
+                        "switches (default 0.001; 0: the time-optimal law with its acceleration jumps)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     add_no_plots(p)
     p.set_defaults(func=run_retime)

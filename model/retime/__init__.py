@@ -17,12 +17,13 @@
 from .core import DEFAULT_GRID, retime, retime_path
 from .limits import DEFAULT_TORQUE_MARGIN, RetimeLimits, retime_limits
 from .path import PATH_KINDS, PathLimitError, RetimePath, blended_path, segment_grids, straight_path
-from .result import DEFAULT_SAMPLE_STEP, GridCheck, Retiming
+from .result import DEFAULT_SAMPLE_STEP, DEFAULT_SMOOTH, GridCheck, Retiming
 from .solver import PathConstraints, RetimeInfeasibleError, SegmentSolution, path_constraints, solve_segment
 
 __all__ = [
     "DEFAULT_GRID",
     "DEFAULT_SAMPLE_STEP",
+    "DEFAULT_SMOOTH",
     "DEFAULT_TORQUE_MARGIN",
     "GridCheck",
     "PATH_KINDS",

@@ -20,7 +20,7 @@ from .limits import RetimeLimits
 from .path import RetimePath
 from .solver import PathConstraints, SegmentSolution
 
-__all__ = ["Retiming", "GridCheck", "DEFAULT_SAMPLE_STEP", "JUMP_STEP"]
+__all__ = ["Retiming", "GridCheck", "DEFAULT_SAMPLE_STEP", "DEFAULT_SMOOTH", "JUMP_STEP"]
 
 Array = npt.NDArray[np.float64]
 
@@ -30,6 +30,42 @@ DEFAULT_SAMPLE_STEP = 1e-3
 #: any control period (a closed loop reads the reference at most every 0.1 ms here), far above the rounding
 #: of a time of hours (1e-12 s).
 JUMP_STEP = 1e-6
+#: Default width of the window a sampled retimed motion is averaged over, s: one period of the default 1 kHz
+#: control rate, so that a bang-bang switch of the time-optimal law becomes a ramp the sampled loop can follow.
+DEFAULT_SMOOTH = 1e-3
+
+
+def _law(sol: SegmentSolution, tau: Array) -> tuple[Array, Array, Array, Array]:
+    """One segment's time law at the times ``tau`` (s from its start; at rest before and after): s, sd, sdd and the
+    integral of s from 0 to tau (constant sdd per stage: s, sd, sdd exact; the integral exact too)."""
+    h = sol.stage_times
+    t0 = np.concatenate([[0.0], np.cumsum(h)])
+    s0, y0, u = sol.s[:-1], sol.sd[:-1], sol.sdd
+    # integral of s over each whole stage: s0 h + y0 h^2 / 2 + u h^3 / 6
+    whole = np.concatenate([[0.0], np.cumsum(s0 * h + 0.5 * y0 * h * h + u * h ** 3 / 6.0)])
+    T = float(t0[-1])
+    tt = np.clip(tau, 0.0, T)
+    i = np.clip(np.searchsorted(t0, tt, side="right") - 1, 0, h.size - 1)
+    d = np.clip(tt - t0[i], 0.0, h[i])
+    s = s0[i] + y0[i] * d + 0.5 * u[i] * d * d
+    sd = y0[i] + u[i] * d
+    sdd = u[i].copy()
+    integral = whole[i] + s0[i] * d + 0.5 * y0[i] * d * d + u[i] * d ** 3 / 6.0
+    before, after = tau < 0.0, tau > T
+    s[before], s[after] = sol.s[0], sol.s[-1]
+    sd[before | after] = 0.0
+    sdd[before | after] = 0.0
+    integral[before] = sol.s[0] * tau[before]
+    integral[after] = whole[-1] + sol.s[-1] * (tau[after] - T)
+    return s, sd, sdd, integral
+
+
+def _smoothed_law(sol: SegmentSolution, tau: Array, w: float) -> tuple[Array, Array, Array]:
+    """The time law averaged over ``[tau - w/2, tau + w/2]``: s, sd and sdd of the averaged motion, each the exact
+    derivative of the one before (differences of the law's integral, position and speed across the window)."""
+    a = _law(sol, tau + 0.5 * w)
+    b = _law(sol, tau - 0.5 * w)
+    return (a[3] - b[3]) / w, (a[0] - b[0]) / w, (a[1] - b[1]) / w
 
 
 @dataclass(frozen=True)
@@ -170,23 +206,49 @@ class Retiming:
             parts.append(t)
         return np.concatenate(parts)
 
-    def trajectory(self, dt: float = DEFAULT_SAMPLE_STEP) -> Trajectory:
-        """The motion sampled at :meth:`sample_times` (step at most ``dt``, s), as a Trajectory.
+    def trajectory(self, dt: float = DEFAULT_SAMPLE_STEP, smooth: float = DEFAULT_SMOOTH) -> Trajectory:
+        """The motion sampled every ``dt`` at most (s), as a Trajectory (what ``manip retime`` writes and tracks).
 
-        Its ``path`` is the quintic Hermite through those samples (:func:`model.trajectory_file.sampled_trajectory`),
-        the same that ``manip track --trajectory`` builds from the CSV of these samples. A segment boundary's
-        sample holds the acceleration of the segment that ends there, the sample :data:`JUMP_STEP` later that
-        of the one that starts.
+        Its ``path`` is the quintic Hermite through the samples (:func:`model.trajectory_file.sampled_trajectory`),
+        the same that ``manip track --trajectory`` builds from the CSV of these samples.
+
+        ``smooth`` (s, default :data:`DEFAULT_SMOOTH`): the time law of each segment averaged over a window of that
+        width (:meth:`smoothed`): still exactly on the path, its acceleration ramps over ``smooth`` where the
+        time-optimal one jumps (a bang-bang switch, the start and stop at a waypoint), so that a loop sampled at
+        that period can follow it; each segment lasts ``smooth`` longer. The torques are then averages of admissible
+        ones over the window, within the bounds up to the change of the path's coefficients across it
+        (``docs/retime.md`` gives the measured excess). ``smooth = 0``: the time-optimal law itself, its
+        jumps between two samples :data:`JUMP_STEP` apart at segment boundaries.
         """
         from ..trajectory_file import sampled_trajectory
 
-        t = self.sample_times(dt)
-        q, qd, qdd = self.batch(t)
-        for k in range(1, len(self.segments)):
-            i = int(np.searchsorted(t, self.segment_times[k]))
-            qd[i] = 0.0
-            qdd[i] = self.constraints[k - 1].dq[-1] * self.segments[k - 1].sdd[-1]
-        return sampled_trajectory(t, q, qd, qdd, name="retime", t_via=self.segment_times,
+        if smooth < 0.0 or not math.isfinite(smooth):
+            raise ValueError(f"smooth: expected a window >= 0 s, got {smooth!r}")
+        if smooth == 0.0:
+            t = self.sample_times(dt)
+            q, qd, qdd = self.batch(t)
+            for k in range(1, len(self.segments)):
+                i = int(np.searchsorted(t, self.segment_times[k]))
+                qd[i] = 0.0
+                qdd[i] = self.constraints[k - 1].dq[-1] * self.segments[k - 1].sdd[-1]
+            bounds = self.segment_times
+        else:
+            parts, start, bounds = [], 0.0, [0.0]
+            for k, sol in enumerate(self.segments):
+                T = sol.duration + smooth
+                m = max(1, math.ceil(T / dt - 1e-9))
+                tau = np.arange(0 if k == 0 else 1, m + 1) * (T / m)
+                tau[-1] = T
+                s, sd, sdd = _smoothed_law(sol, tau - 0.5 * smooth, smooth)
+                path = self.path.segments[k]
+                qk, dq, ddq = path.batch(np.clip(s, path.t_start, path.t_end))
+                parts.append((start + tau, qk, dq * sd[:, None], dq * sdd[:, None] + ddq * (sd * sd)[:, None]))
+                start += T
+                bounds.append(start)
+            t, q, qd, qdd = (np.concatenate([p[i] for p in parts]) for i in range(4))
+            t[-1] = start
+            bounds = np.array(bounds)
+        return sampled_trajectory(t, q, qd, qdd, name="retime", t_via=bounds,
                                   q_via=self.path.waypoints if self.path.kind == "straight"
                                   else self.path.waypoints[[0, -1]])
 

@@ -30,7 +30,8 @@ def test_retime_writes_the_trajectory_json_and_figure(retimed, capsys):
     assert data["grid_check"]["torque"] == pytest.approx(1.0, abs=1e-9)
     assert data["limits"]["torque_margin"] == 0.9 and data["limits"]["velocity"] == [None] * 4
     table = read_joint_table(retimed / "trajectory.csv", ("shoulder", "elbow", "quill", "wrist"), ("q", "qd", "qdd"))
-    assert table.t[0] == 0.0 and table.t[-1] == pytest.approx(data["duration_s"], rel=1e-15)
+    assert table.t[0] == 0.0 and table.t[-1] == data["file_duration_s"]
+    assert data["smooth_s"] == 1e-3 and 0.99 < data["file_torque_use"] < 1.003
     assert np.all(np.diff(table.t) <= 1e-3 * (1 + 1e-12)) and table.t.size == data["samples"]
     assert np.allclose(table["q"][-1], [np.pi / 2, 0.0, 3.0, 0.0], atol=1e-12)  # the place waypoint qD
     assert (retimed / "retime.png").read_bytes()[:8] == PNG_MAGIC
@@ -43,7 +44,8 @@ def test_track_follows_the_file_without_saturating(retimed, tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     retime = json.loads((retimed / "retime.json").read_text())
     assert metrics["task"].endswith("trajectory.csv")
-    assert metrics["duration_s"] == pytest.approx(retime["duration_s"], abs=1e-3)
+    assert metrics["duration_s"] == pytest.approx(retime["file_duration_s"], abs=1e-3)
+    assert retime["file_duration_s"] == pytest.approx(retime["duration_s"] + 5 * 1e-3, rel=1e-12)  # 5 segments
     assert metrics["saturated_fraction"] == [0.0] * 4
     assert metrics["tau_m_max"] == retime["limits"]["tau_m_max"]  # held to the limits it was retimed within
 
@@ -68,6 +70,7 @@ def test_blend_and_flags(tmp_path):
     (["--acceleration-limit", "-3"], r"--acceleration-limit: expected limits > 0"),
     (["--velocity-scale", "0"], r"--velocity-scale: expected a finite factor > 0, got 0.0"),
     (["--dt", "0"], r"--dt: expected a sampling period in \(0, 0.1\] s"),
+    (["--smooth", "-1"], r"--smooth: expected a window in \[0, 0.1\] s"),
     (["--task", "dance"], r"task 'dance': robot 'scara' has no such task"),
 ])
 def test_bad_input_is_one_line_and_exit_status_2(tmp_path, capsys, argv, message):
