@@ -70,7 +70,10 @@ def chosen_task(robot: "Robot", task: str | None, waypoints: str | None) -> "Tas
 def retime_task(robot: "Robot", task: "Task", *, blend: bool = False, torque_margin: float = 0.9,
                 velocity_limit: Any = None, acceleration_limit: Any = None, velocity_scale: float = 1.0,
                 acceleration_scale: float = 1.0, grid: int = 1000) -> "Retiming":
-    """Retime ``task`` on ``robot`` within the design's motor torque limits (robot file or default rule)."""
+    """Retime ``task`` on ``robot`` within the design's motor torque limits (robot file or default rule).
+
+    The defaults are :data:`model.retime.DEFAULT_TORQUE_MARGIN` and :data:`model.retime.DEFAULT_GRID`.
+    """
     from control_design.joint_model import sample_configurations, torque_limits
     from control_design.reference import reference_task
     from model.retime import retime, retime_limits
@@ -150,7 +153,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--blend", action="store_true",
                    help="a C2 cubic spline through the waypoints, not stopping (default: straight segments, at rest "
                         "at each waypoint)")
-    p.add_argument("--torque-margin", type=float, default=0.9, metavar="X",
+    from model.retime import DEFAULT_GRID, DEFAULT_SAMPLE_STEP, DEFAULT_SMOOTH, DEFAULT_TORQUE_MARGIN
+
+    p.add_argument("--torque-margin", type=float, default=DEFAULT_TORQUE_MARGIN, metavar="X",
                    help="share of each motor's torque limit the motion may use, (0, 1] (default 0.9: 10 %% left for "
                         "the tracking loop)")
     p.add_argument("--velocity-limit", default=None, metavar="V",
@@ -161,10 +166,11 @@ def register(subparsers: Any) -> None:
     p.add_argument("--velocity-scale", type=float, default=1.0, metavar="X", help="factor on the velocity limits")
     p.add_argument("--acceleration-scale", type=float, default=1.0, metavar="X",
                    help="factor on the acceleration limits")
-    p.add_argument("--grid", type=bounded_int(10, 100_000, "a number of grid intervals"), default=1000, metavar="N",
-                   help="grid intervals along the path (default 1000)")
-    p.add_argument("--dt", type=float, default=1e-3, metavar="S", help="sampling period of trajectory.csv, s (default 0.001)")
-    p.add_argument("--smooth", type=float, default=1e-3, metavar="S",
+    p.add_argument("--grid", type=bounded_int(10, 100_000, "a number of grid intervals"), default=DEFAULT_GRID,
+                   metavar="N", help=f"grid intervals along the path (default {DEFAULT_GRID})")
+    p.add_argument("--dt", type=float, default=DEFAULT_SAMPLE_STEP, metavar="S",
+                   help=f"sampling period of trajectory.csv, s (default {DEFAULT_SAMPLE_STEP:g})")
+    p.add_argument("--smooth", type=float, default=DEFAULT_SMOOTH, metavar="S",
                    help="average the time law over S s in trajectory.csv, so that a loop sampled every S s follows its "
                         "switches (default 0.001; 0: the time-optimal law with its acceleration jumps)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
