@@ -125,6 +125,9 @@ class LinkDescription:
     rotor_mass: float = 0.0
     # Continuous torque rating of the motor (N m, motor side); None when the file states none.
     torque_limit: float | None = None
+    # Joint speed and acceleration limits (joint side: rad/s, rad/s^2 or m/s, m/s^2); None when none is stated.
+    velocity_limit: float | None = None
+    acceleration_limit: float | None = None
     # The joint coordinate enters negated (theta = -q + theta, or d = -q + d), as the Robotics Toolbox's flip.
     flip: bool = False
     # Convention "urdf" only (a, alpha, d, theta are then 0 and unused): the joint frame's pose in the
@@ -249,13 +252,16 @@ class RobotDescription:
             "convention": self.convention, "base": self.base, "tool": self.tool, "tip": self.tip,
             "gravity": self.gravity,
             "links": [
-                {k: v for k, v in dataclasses.asdict(lk).items()
-                 if k not in ("name", "qlim", "torque_limit", "velocity_limit", "friction_source")}
+                {k: v for k, v in dataclasses.asdict(lk).items() if k not in _NOT_PHYSICS}
                 for lk in self.links
             ],
         }
         text = json.dumps(payload, sort_keys=True, default=float)
         return hashlib.sha256(text.encode()).hexdigest()
+
+
+#: Link fields that do not enter the equations of motion (so not the cache key of generated code): names and limits.
+_NOT_PHYSICS = frozenset({"name", "qlim", "torque_limit", "velocity_limit", "acceleration_limit", "friction_source"})
 
 
 def identifier_from_name(name: str) -> str:
@@ -325,8 +331,8 @@ _TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks", "
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
     "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
-    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "velocity_limit", "source", "flip",
-    "inertia_note",
+    "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source", "flip", "inertia_note",
+    "velocity_limit", "acceleration_limit",
 )
 _POSE_KEYS = ("xyz", "rpy")
 _TASK_REQUIRED = ("name", "waypoints")
@@ -483,14 +489,20 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
             if not isinstance(data["name"], str):
                 raise w.fail(i, "name", data["name"], "a string")
             kw["name"] = data["name"]
-    for key, expected in (("torque_limit", "a motor torque rating > 0 (N m)"),
-                          ("velocity_limit", "a joint speed limit > 0 (rad/s or m/s)")):
+    if "torque_limit" in data:
+        with w.collect():
+            limit = _number(w, i, "torque_limit", data["torque_limit"])
+            if limit <= 0:
+                raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
+            kw["torque_limit"] = limit
+    for key, what in (("velocity_limit", "a joint speed limit > 0 (rad/s or m/s)"),
+                      ("acceleration_limit", "a joint acceleration limit > 0 (rad/s^2 or m/s^2)")):
         if key in data:
             with w.collect():
-                limit = _number(w, i, key, data[key])
-                if limit <= 0:
-                    raise w.fail(i, key, data[key], expected)
-                kw[key] = limit
+                value = _number(w, i, key, data[key])
+                if value <= 0:
+                    raise w.fail(i, key, data[key], what)
+                kw[key] = value
     kw["friction_source"] = tuple(FROM_FILE if key in data else FROM_DEFAULT
                                   for key in ("viscous_friction", "coulomb_friction"))
     if "flip" in data:

@@ -51,8 +51,8 @@ __all__ = [
 ]
 
 #: The keys a ``[joints.NAME]`` table may hold: the motor keys of a ``[[links]]`` table, and its source.
-MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "velocity_limit",
-              "rotor_mass", "source")
+MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source",
+              "velocity_limit", "acceleration_limit")
 #: A ``<limit velocity>`` at or above this is "no limit": the value :mod:`model.urdf_export` writes for a joint whose
 #: description states none (URDF requires the attribute and a finite number).
 NO_LIMIT = sys.float_info.max

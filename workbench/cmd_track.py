@@ -1,7 +1,7 @@
 """``manip track``: closed-loop tracking of a task on the nonlinear model, from the command line.
 
-``manip track ROBOT --controller KIND [--task pick-and-place | --waypoints FILE] [--segment-time S] [--rate HZ]
-[--payload KG] --out DIR`` simulates the closed loop on the nonlinear model and
+``manip track ROBOT --controller KIND [--task pick-and-place | --waypoints FILE | --trajectory FILE.csv]
+[--segment-time S] [--rate HZ] [--payload KG] --out DIR`` simulates the closed loop on the nonlinear model and
 writes ``DIR/metrics.json`` and ``DIR/tracking_error.png``, ``DIR/torques.png``,
 ``DIR/joints.png``, and ``DIR/tracking.npz`` (t, q, q_ref: the run that
 ``manip teach ROBOT --result DIR`` plays); progress goes to stderr. With a plant/model mismatch
@@ -74,8 +74,17 @@ def run_track(args: argparse.Namespace) -> int:
         raise DesignSpecError(f"--payload: expected a mass >= 0 kg, got {args.payload!r}")
     check_out_dir(args.out)
     robot = load_robot(args.robot)
-    task = reference_task_name(robot) if args.task is None and args.waypoints is None else args.task
-    traj = task_trajectory(robot, task, args.waypoints, args.segment_time)
+    if args.trajectory is not None:  # a trajectory file (manip retime, manip excite): its samples as they are
+        from model.trajectory_file import read_trajectory
+
+        if args.segment_time is not None:
+            raise DesignSpecError("a --trajectory file carries its own times; give one or the other",
+                                  parameter="segment_time")
+        traj = read_trajectory(args.trajectory, robot.description)
+        task = str(args.trajectory)
+    else:
+        task = reference_task_name(robot) if args.task is None and args.waypoints is None else args.task
+        traj = task_trajectory(robot, task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate,
                           analyse=False)
@@ -143,6 +152,8 @@ def register(subparsers: Any, full: bool = True) -> None:
     src.add_argument("--task", default=None,
                      help="a [[tasks]] entry of the robot file or 'tour' (default: the file's first task, else tour)")
     src.add_argument("--waypoints", default=None, metavar="FILE", help="TOML or CSV joint waypoint file")
+    src.add_argument("--trajectory", default=None, metavar="FILE.csv",
+                     help="trajectory file: time, q_<joint>.., qd_<joint>.., qdd_<joint>.. (manip retime, manip excite)")
     p.add_argument("--segment-time", type=float, default=None, metavar="S", help="duration of every segment, s (default 3)")
     p.add_argument("--payload", type=float, default=None, metavar="KG",
                    help="payload on the simulated arm only (unknown to the controller), kg")

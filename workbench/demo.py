@@ -3,7 +3,8 @@
 Steps: build the model (compiled dynamics), design decentralised PD and
 computed-torque loops, export and validate the plant FMU, run the reference
 task (the seed's pick-and-place on the SCARA) closed loop through the FMU and
-compare it with the pure Python closed loop, animate the arm, and write
+compare it with the pure Python closed loop, retime the task within the motor
+limits and track it, run a robustness sweep, animate the arm, and write
 ``report.md`` / ``report.html`` with every number and plot.
 """
 
@@ -22,12 +23,14 @@ from closed_loop import TrackingResult, closed_loop_through_fmu, simulate_tracki
 from control_design import design_robot, reference_task
 from control_design.reference import reference_task_name
 from model.robot import load_robot
+from model.tasks import find_task
 
 from .formatting import format_build
 from .outputs import write_json
 from .report import Report
 from .sections import (design_section, fmu_section, motion_section, robot_section, task_section, torque_limit_section,
                        tracking_section)
+from .report_retime import retime_section
 from .report_sweep import sweep_section
 from .workspace import workspace_section
 
@@ -87,7 +90,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     gif = gif and plots
-    progress = Progress(9 if gif else 8, stream)
+    progress = Progress(10 if gif else 9, stream)
     files: list[Path] = []
 
     def warn(line: str) -> None:
@@ -146,6 +149,10 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
         progress.note(f"{label}: max error {np.max(max_error[kind]):.3e}, FMU vs Python {diff:.3e}")
     metrics = {kind: fmu_results[kind].metrics().to_dict() for kind in fmu_results}
     files.append(write_json(out / "metrics.json", metrics))
+
+    progress.step("retiming the task within 90 % of the motor limits, tracked under computed torque")
+    files += retime_section(report, out, robot, find_task(robot.description, reference_task_name(robot)), designs["ct"],
+                            rate_hz=rate_hz, plots=plots, note=progress.note)
 
     progress.step("a robustness sweep: computed torque over payload x friction, compiled loops on Dask")
     files += sweep_section(report, out, robot_name, plots=plots, rate_hz=rate_hz, bandwidth=bandwidth,

@@ -205,6 +205,22 @@ def test_torque_limit_must_be_positive(tmp_path):
         load_description(path)
 
 
+@pytest.mark.parametrize(("key", "value", "expected"), [
+    ("velocity_limit", "0.0", "a joint speed limit > 0 (rad/s or m/s)"),
+    ("velocity_limit", '"fast"', "a number"),
+    ("acceleration_limit", "-2.0", "a joint acceleration limit > 0 (rad/s^2 or m/s^2)"),
+])
+def test_velocity_and_acceleration_limits_must_be_positive(tmp_path, key, value, expected):
+    path = _write(tmp_path, _toml({key: value}))
+    shown = "'fast'" if value.startswith('"') else value
+    message = f"{path}, link 2: field '{key}' = {shown}: expected {expected}"
+    with pytest.raises(RobotDescriptionError, match=re.escape(message)):
+        load_description(path)
+    good = load_description(_write(tmp_path, _toml({key: "2.5"})))
+    assert getattr(good.links[1], key) == 2.5 and getattr(good.links[0], key) is None
+    assert good.digest() == load_description(_write(tmp_path, _toml())).digest()  # not physics: same compiled code
+
+
 def test_inertia_note_acknowledges_a_triangle_inequality_break():
     import warnings
 

@@ -66,3 +66,25 @@ def test_substep_rule_pinned():
 @pytest.mark.parametrize("dt, expected", [(1e-3, 1), (2e-3, 2), (2.5e-3, 3)])
 def test_substeps_follow_the_1ms_ceiling(dt, expected):
     assert default_substeps(_robot(0.0), dt, [0.0]) == expected
+
+
+def test_retime_defaults():
+    from model.retime import DEFAULT_GRID, DEFAULT_SAMPLE_STEP, DEFAULT_SMOOTH, DEFAULT_TORQUE_MARGIN
+    from model.retime.result import JUMP_STEP
+    from model.retime.path import MIN_SEGMENT_INTERVALS
+    from model.retime.solver import REFINE_RTOL
+    from model.trajectory_file import CONSISTENCY_TOL
+
+    # 10 % of each motor's torque left to the tracking loop: computed torque at 50 rad/s, 1 kHz needs ~7 %
+    # of a switch (Kd h) once the switches are averaged over one period
+    assert DEFAULT_TORQUE_MARGIN == 0.9
+    # 1000 grid intervals: durations within 0.1 % of 2000's on the built-ins, a tenth of a second per retime
+    assert (DEFAULT_GRID, MIN_SEGMENT_INTERVALS) == (1000, 8)
+    # samples every 1 ms, the law averaged over one period of the default 1 kHz control rate
+    assert (DEFAULT_SAMPLE_STEP, DEFAULT_SMOOTH) == (1e-3, 1e-3)
+    # a jump between two samples 1 us apart: far below any control period, far above rounding of hours
+    assert JUMP_STEP == 1e-6
+    # refinement stops below 1e-7: the viscous lines then cost < 1e-7 against the exact problem
+    assert REFINE_RTOL == 1e-7
+    # a trajectory file's q, qd, qdd agree to 1 % of the joint's peak speed per interval (deg instead of rad: 5700 %)
+    assert CONSISTENCY_TOL == 0.01

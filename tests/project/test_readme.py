@@ -88,8 +88,8 @@ def test_demo_writes_the_report_with_every_section(tour):
     out = folder / "out"
     html = (out / "report.html").read_text()
     md = (out / "report.md").read_text()
-    for section in ("Robot", "Control design", "FMU", "Closed-loop tracking through the FMU", "Robustness sweep",
-                    "Motion"):
+    for section in ("Robot", "Control design", "FMU", "Closed-loop tracking through the FMU", "Retimed within the limits",
+                    "Robustness sweep", "Motion"):
         assert f"## {section}" in md
     assert "a [m]" in md and "-62.6111" in md  # the DH table and the motor data
     assert "result: OK" in md  # the FMU validation summary
@@ -98,6 +98,7 @@ def test_demo_writes_the_report_with_every_section(tour):
     assert any("bode_" in p for p in images) and any("step_" in p for p in images)
     assert any("tracking_error" in p for p in images)
     assert "sweep/heatmap_max_error.png" in images and (out / "sweep" / "results.csv").is_file()
+    assert {"retime/straight.png", "retime/blend.png"} <= set(images) and (out / "retime" / "straight.csv").is_file()
     for rel in images:
         assert (out / rel).is_file() and (out / rel).stat().st_size > 1000, rel
     assert (out / "scara.fmu").is_file() and (out / "metrics.json").is_file()

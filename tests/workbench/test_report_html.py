@@ -110,6 +110,19 @@ def test_report_html_has_none_of_the_reported_defects(demo):
 
 
 @pytest.mark.slow
+def test_report_retime_section_is_faster_and_never_saturates(demo):
+    md = (demo / "report.md").read_text().splitlines()
+    k = md.index("## Retimed within the limits")
+    head = next(i for i in range(k, len(md)) if md[i].startswith("| path | duration [s]"))
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in md[head + 2:head + 4]]
+    assert [r[0] for r in rows] == ["straight segments, stopping at each waypoint", "C2 spline, not stopping"]
+    for _path, duration, faster, used, _err, peak, saturated in rows:
+        assert 3.0 < float(duration) < 4.5 and float(faster) == pytest.approx(15.0 / float(duration), rel=1e-3)
+        assert float(used) == pytest.approx(90.0, abs=1e-6)  # the retime uses the margin it was given, exactly
+        assert 90.0 < float(peak) < 100.0 and float(saturated) == 0.0  # the feedback fits in the 10 % left
+
+
+@pytest.mark.slow
 def test_report_tables_give_each_number_column_one_format(demo):
     """RMS errors from 1e-7 to 4e-3 in one column: all in scientific notation, not half fixed-point."""
     md = (demo / "report.md").read_text().splitlines()
