@@ -38,6 +38,8 @@ ADDRESS = ("", "\0", "a b", "-1")
 #: The kind of each text argument (by its ``dest``): which hostile values it gets.
 TEXT_KINDS: dict[str, tuple[str, ...]] = {
     "robot": INPUT_PATH, "spec": INPUT_PATH, "fmu": INPUT_PATH, "waypoints": INPUT_PATH, "result": INPUT_PATH,
+    "trajectory": INPUT_PATH,
+    "velocity_limit": NUMBER, "acceleration_limit": NUMBER,  # one number, or one per joint with commas
     "out": OUT_DIR, "output": OUT_FILE, "toml": OUT_FILE,
     "controller": NAME, "task": NAME, "platforms": NAME,
     "host": ADDRESS, "listen": ADDRESS, "scheduler": ADDRESS,
@@ -48,7 +50,14 @@ VALID: set[tuple[str, str, str]] = {
     ("track", "--payload", "0"),           # no payload: the exact plant
     ("track", "--friction-scale", "0"),    # a frictionless plant
     ("workspace", "--seed", "0"),
-    ("export-fmu", "--step", "1e308"),     # an internal step longer than any communication step: one RK4 step each
+    ("export-fmu", "--step", "1e308"),
+    ("retime", "--velocity-limit", "inf"),        # inf: no speed limit (documented)
+    ("retime", "--acceleration-limit", "inf"),
+    ("retime", "--velocity-limit", "1e308"),      # a limit no motion reaches
+    ("retime", "--acceleration-limit", "1e308"),
+    ("retime", "--velocity-scale", "1e308"),      # a factor on limits the robot states (planar2r states none)
+    ("retime", "--acceleration-scale", "1e308"),
+    ("retime", "--smooth", "0"),                  # 0: the exact time law, unaveraged (documented)     # an internal step longer than any communication step: one RK4 step each
 }
 #: Flags of the base command line that a flag under test cannot be combined with (dropped for its cases).
 CONFLICTS: dict[tuple[str, str], tuple[str, ...]] = {
@@ -70,6 +79,7 @@ def _base(command: str, tmp: Path, fmu_file: Path, spec_file: Path) -> list[str]
         "teach": ["teach", "planar2r", "--no-browser"],
         "workspace": ["workspace", "planar2r", "-o", str(tmp / "out" / "ws.png"), "--samples=100"],
         "sweep": ["sweep", str(spec_file), "--out", str(tmp / "out"), "--workers=1", "--no-plots"],
+        "retime": ["retime", "planar2r", "--out", str(tmp / "out"), "--grid=50"],
         "demo": ["demo", "--robot", "planar2r", "--out", str(tmp / "out"), "--no-plots", "--no-gif"],
     }[command]
 
