@@ -113,13 +113,13 @@ def inertial_block(mass: float, com: Sequence[float], inertia_com: npt.ArrayLike
     return np.concatenate([[mass], mass * c, _inertia_six(I_o)])
 
 
-def link_inertia_about_com(block: npt.ArrayLike) -> tuple[float, Array, Array]:
-    """``(mass, com (3,), inertia about the com (3, 3))`` of a 10-vector; a massless block keeps com 0 and
-    its inertia about the origin."""
+def link_inertia_about_com(block: npt.ArrayLike, min_mass: float = 0.0) -> tuple[float, Array, Array]:
+    """``(mass, com (3,), inertia about the com (3, 3))`` of a 10-vector; a block of mass at most ``min_mass``
+    is taken as massless: mass and com 0, its inertia the one about the origin."""
     b = np.asarray(block, dtype=float)
     m, h, I_o = float(b[0]), b[1:4], _inertia_matrix(b[4:10])
-    if m <= 0.0:
-        return m, np.zeros(3), I_o
+    if m <= min_mass:
+        return 0.0, np.zeros(3), I_o
     c = h / m
     return m, c, I_o - m * (c @ c * np.eye(3) - np.outer(c, c))
 

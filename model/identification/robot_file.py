@@ -4,7 +4,7 @@ that every command takes it.
 :func:`identified_description` puts the standard parameters ``pi`` of a physically consistent fit into
 a copy of the robot's description, per link (link frame i, as the file states them):
 
-* ``mass = m``, ``com = mc / m`` (0 for a massless link) and ``inertia`` about the centre of mass
+* ``mass = m``, ``com = mc / m`` (0 for a link below :data:`MASSLESS` of the arm's mass) and ``inertia`` about the centre of mass
   ``I_o - m (|c|^2 1 - c c^T)``;
 * ``motor_inertia = Ia / G^2``, ``viscous_friction = fv / G^2`` and the symmetric
   ``coulomb_friction = [fc / |G|, -fc / |G|]`` on the motor side, with the file's gear ratio ``G``;
@@ -35,6 +35,9 @@ __all__ = ["IDENTIFIED_TOML", "IDENTIFIED_URDF", "identified_description", "writ
 #: File names in the output folder of ``manip identify``.
 IDENTIFIED_TOML = "identified.toml"
 IDENTIFIED_URDF = "identified.urdf"
+#: A link lighter than this fraction of the arm's mass is written massless (a fit drives a mass the torques do
+#: not see towards 0, and its centre of mass, a ratio of two vanishing numbers, means nothing).
+MASSLESS = 1e-9
 
 
 def _six(I: np.ndarray) -> tuple[float, ...]:
@@ -51,10 +54,11 @@ def identified_description(desc: RobotDescription, pi: npt.ArrayLike, *, source:
     ``source`` replaces the description's source (e.g. the data file it was identified from).
     """
     p = np.asarray(pi, dtype=float)
+    tiny = MASSLESS * max(float(np.sum(np.abs(p[0::PER_JOINT]))), 1e-300)
     links = []
     for i, lk in enumerate(desc.links):
         o = PER_JOINT * i
-        m, c, I_c = link_inertia_about_com(p[o:o + 10])
+        m, c, I_c = link_inertia_about_com(p[o:o + 10], tiny)
         G = lk.gear_ratio
         ia, fv, fc = (max(float(v), 0.0) for v in p[o + 10:o + 13])
         links.append(dataclasses.replace(
