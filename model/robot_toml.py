@@ -2,7 +2,8 @@
 as the robot file that reads back as it (every link field, base, tool, rest, gravity and tasks).
 
 Numbers are written with ``repr`` (the shortest text that reads back as the same float), so links,
-gravity and rest round-trip exactly; ``base`` and ``tool`` are written as ``{xyz, rpy}`` from
+gravity and rest round-trip exactly; an inertia that breaks the triangle inequality (published
+data kept as given) gets an ``inertia_note`` saying so; ``base`` and ``tool`` are written as ``{xyz, rpy}`` from
 :func:`~model.description.tr2rpy`, and read back to rounding (1e-15). A URDF robot has no DH table:
 :mod:`model.urdf_export` writes it as URDF plus a companion TOML.
 """
@@ -11,6 +12,8 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+
+import numpy as np
 
 from .description import LinkDescription, RobotDescription, pose_matrix, tr2rpy
 from .errors import InputError
@@ -45,6 +48,9 @@ def _link(link: LinkDescription) -> list[str]:
               f"motor_inertia = {_num(link.motor_inertia)}", f"gear_ratio = {_num(link.gear_ratio)}",
               f"viscous_friction = {_num(link.viscous_friction)}",
               f"coulomb_friction = {_list(link.coulomb_friction)}"]
+    lam = np.linalg.eigvalsh(link.inertia_matrix)
+    if lam[0] + lam[1] < lam[2] - 1e-12 * max(1.0, float(np.abs(lam).max())):  # as the reader's check
+        lines.append('inertia_note = "breaks the triangle inequality; kept as given in the file it was written from"')
     if link.rotor_mass:
         lines.append(f"rotor_mass = {_num(link.rotor_mass)}")
     if link.qlim is not None:

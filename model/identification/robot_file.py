@@ -26,6 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..description import RobotDescription
+from ..files import write_atomic
 from ..robot_toml import write_robot_toml
 from ..urdf_export import export_urdf
 from .parameters import PER_JOINT, link_inertia_about_com
@@ -75,5 +76,9 @@ def write_identified(desc: RobotDescription, out: str | Path, header: str = "") 
     ``identified.urdf`` and the ``identified.toml`` that points at it (URDF robots). Returns the files."""
     out = Path(out)
     if desc.convention == "urdf":
-        return export_urdf(desc, out / IDENTIFIED_URDF, out / IDENTIFIED_TOML)
+        files = export_urdf(desc, out / IDENTIFIED_URDF, out / IDENTIFIED_TOML)
+        if header:  # say where the companion TOML comes from above what export_urdf writes
+            lines = "".join(f"# {line}\n" for line in header.splitlines())
+            write_atomic(files[-1], lines + files[-1].read_text())
+        return files
     return [write_robot_toml(desc, out / IDENTIFIED_TOML, header)]
