@@ -26,11 +26,7 @@ from .args import UsageError, add_no_plots
 from .formatting import format_table
 from .outputs import check_out_dir, out_dir, out_file, save_figure, write_json
 
-__all__ = ["IDENTIFY_FILES", "register", "run_excite", "run_identify"]
-
-#: What ``manip identify`` writes besides the robot file(s).
-IDENTIFY_FILES = ("identification.json", "holdout_torques.png", "residual_spectrum.png")
-
+__all__ = ["register", "run_excite", "run_identify", "write_identification"]
 
 def _say(command: str):
     return lambda line: print(f"manip {command}: {line}", file=sys.stderr, flush=True)
@@ -126,7 +122,7 @@ def _excitation_rows(robot: Any, result: Any, q, qd, qdd) -> list[list[Any]]:
 
 def run_identify(args: argparse.Namespace) -> int:
     """``manip identify``: fit a robot's parameters to a log; write identified.toml, identification.json, plots."""
-    from model.identification import Regressor, base_parameters, identified_description, write_identified
+    from model.identification import Regressor, base_parameters
     from model.identification.identify import identify_log
     from model.joint_table import read_joint_table
     from model.robot import load_robot
@@ -151,21 +147,31 @@ def run_identify(args: argparse.Namespace) -> int:
     result = identify_log(robot, table, cutoff_hz=args.cutoff, decimation=args.decimation, holdout=args.holdout,
                           regressor=reg, base=base, progress=say)
     _print_identification(args, desc, table, result)
-    out = out_dir(args.out)
-    identified = identified_description(desc, result.pi, source=f"identified by manip identify from {Path(args.data).name}")
-    files = write_identified(identified, out, header=f"{desc.name} identified by manip identify from {Path(args.data).name} "
+    files = write_identification(result, desc, out_dir(args.out), Path(args.data).name, str(args.data),
+                                 plots=not args.no_plots)
+    print(f"wrote {', '.join(str(f) for f in files)}")
+    return 0
+
+
+def write_identification(result: Any, desc: Any, out: Path, data_name: str, data_path: str, *,
+                         plots: bool = True) -> list[Path]:
+    """Write what ``manip identify`` writes into the folder ``out``: the identified robot file(s),
+    ``identification.json`` and (``plots``) the two figures. Returns the files."""
+    from model.identification import identified_description, write_identified
+
+    identified = identified_description(desc, result.pi, source=f"identified by manip identify from {data_name}")
+    files = write_identified(identified, out, header=f"{desc.name} identified by manip identify from {data_name} "
                                                     f"({result.chosen} fit). SI units.")
-    data = {"robot": desc.name, "data": str(args.data), "joints": list(desc.joint_names), **result.to_dict(),
+    data = {"robot": desc.name, "data": data_path, "joints": list(desc.joint_names), **result.to_dict(),
             "robot_file": files[-1].name}
     files.append(write_json(out / "identification.json", data))
-    if not args.no_plots:
+    if plots:
         from .identify_plots import holdout_torque_plot, residual_spectrum_plot
 
         revolute = [lk.is_revolute for lk in desc.links]
         files.append(save_figure(holdout_torque_plot(result, desc.joint_names, revolute), out / "holdout_torques.png"))
         files.append(save_figure(residual_spectrum_plot(result, desc.joint_names, revolute), out / "residual_spectrum.png"))
-    print(f"wrote {', '.join(str(f) for f in files)}")
-    return 0
+    return files
 
 
 def _median_step(t: Sequence[float]) -> float:

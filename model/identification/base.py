@@ -91,13 +91,15 @@ class BaseParameters:
         return np.asarray(Y)[..., list(self.independent)]
 
     def expressions(self, digits: int = 6) -> tuple[str, ...]:
-        """Each base parameter as a sum of standard ones, e.g. ``"I_zz1 + Ia_1 + 0.18645 m_2 - I_xx2"``."""
-        return tuple(_expression(row, self.names, digits) for row in self.K)
+        """Each base parameter as a sum of standard ones, e.g. ``"I_zz1 + Ia_1 + 0.18645 m_2 - I_xx2"`` (that of ``I_zz1R``): the
+        independent parameter first, then those regrouped into it."""
+        return tuple(_expression(row, self.names, digits, j) for row, j in zip(self.K, self.independent))
 
 
-def _expression(row: Array, names: Sequence[str], digits: int) -> str:
+def _expression(row: Array, names: Sequence[str], digits: int, first: int) -> str:
+    """The sum ``row . pi`` in words, the independent parameter ``first`` first, the others in vector order."""
     terms = []
-    for j in np.flatnonzero(row):
+    for j in [first, *(k for k in np.flatnonzero(row) if k != first)]:
         c = float(row[j])
         mag = abs(c)
         coef = "" if abs(mag - 1.0) < 1e-12 else f"{mag:.{digits}g} "

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -42,7 +43,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from ..arrays import as_joint_vector, joint_batch
+from ..arrays import as_joint_vector, joint_batch, shaped_vector
 from ..chain import Chain, build_chain
 from ..codegen import BuildInfo, LazyLibrary, Progress, casadi_evaluate
 from ..description import RobotDescription
@@ -161,6 +162,8 @@ class Regressor:
         key = lambda: f"regressor|{_geometry_key(description)}|{','.join(COMPILED_REGRESSOR)}|{_sources()}"  # noqa: E731
         funcs = lambda: [self.functions[name] for name in COMPILED_REGRESSOR]  # noqa: E731
         self._lazy = LazyLibrary(f"{description.identifier}-regressor", key, funcs, "the regressor")
+        self._pool: list = []  # idle single-state evaluators of _pool_library (list.pop / append are atomic)
+        self._pool_library: Any = None
 
     def __repr__(self) -> str:
         return f"Regressor({self.description.name!r}, {self.n} joints, {self.size} parameters, {self._lazy.state()})"
@@ -188,10 +191,36 @@ class Regressor:
         return [casadi_evaluate(_output(f, k), inputs, N) for k in range(f.n_out())]
 
     def Y(self, q: Any, qd: Any, qdd: Any) -> Array:
-        """(n, 14 n) regressor at one state (rad, m and their derivatives)."""
+        """(n, 14 n) regressor at one state (rad, m and their derivatives).
+
+        Compiled, the call borrows preallocated buffers (a :class:`~model.codegen.PointEvaluator`) from a
+        pool, so it is safe from several threads.
+        """
         n = self.n
-        args = [as_joint_vector(v, n, name) for v, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
-        return self._eval("regressor", args, 1)[0].reshape(self.size, n).T.copy()
+        named = ((q, "q"), (qd, "qd"), (qdd, "qdd"))
+        lib = self._lazy.library or self._lazy.backend(stacklevel=2)
+        if lib is None:
+            args = [as_joint_vector(v, n, name) for v, name in named]
+            return self._eval("regressor", args, 1)[0].reshape(self.size, n).T.copy()
+        pool = self._pool if self._pool_library is lib else self._new_pool(lib)
+        try:
+            ev = pool.pop()
+        except IndexError:
+            ev = lib.point_evaluator("regressor")
+        try:
+            for buf, (value, name) in zip(ev.inputs, named):
+                buf[...] = shaped_vector(value, n, name, "joint values")
+            if not math.isfinite(sum(ev.block.tolist())):  # a finite sum has finite terms; else say which
+                for value, name in named:
+                    as_joint_vector(value, n, name)
+            ev()
+            return ev.outputs[0].reshape(self.size, n).T.copy()
+        finally:
+            pool.append(ev)
+
+    def _new_pool(self, lib: Any) -> list:
+        self._pool, self._pool_library = [], lib
+        return self._pool
 
     def batch(self, Q: Any, QD: Any, QDD: Any) -> Array:
         """(N, n, 14 n) regressors at the N states given as (N, n) arrays, one compiled call."""

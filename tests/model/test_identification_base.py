@@ -96,8 +96,8 @@ def test_planar_2r_spans_the_closed_form():
 def test_expressions_name_the_regrouped_parameters():
     base = base_parameters(Regressor(load_description("planar2r")))
     exprs = dict(zip(base.base_names, base.expressions()))
-    assert exprs["mc_x1R"] == "m_1 + mc_x1 + m_2"
-    assert exprs["I_zz1R"] == "-m_1 + I_zz1 + Ia_1 - m_2"
+    assert exprs["mc_x1R"] == "mc_x1 + m_1 + m_2"
+    assert exprs["I_zz1R"] == "I_zz1 - m_1 + Ia_1 - m_2"
     assert exprs["fv_2"] == "fv_2"
 
 
