@@ -238,93 +238,66 @@ class ExcitationResult:
     notes: tuple[str, ...] = ()
 
 
-class _LogCond(ca.Callback):
-    """``x -> log cond(W_b(x))`` with its exact gradient (see the module docstring)."""
+class _NumpyFunction(ca.Callback):
+    """A CasADi Function of dense inputs computed in numpy: ``fn(x)`` of the first input (the others are the
+    nominal outputs CasADi passes to a Jacobian), with an exact Jacobian ``jacobian(x)`` when given."""
 
-    def __init__(self, problem: "_Problem") -> None:
+    def __init__(self, name: str, in_shapes: Sequence[tuple[int, int]], out_shape: tuple[int, int],
+                 fn: Callable[[Array], Array], jacobian: Callable[[Array], Array] | None = None,
+                 opts: dict | None = None) -> None:
         ca.Callback.__init__(self)
-        self.problem = problem
-        self.construct("log_cond", {})
+        self.in_shapes, self.out_shape, self.fn, self.jac = list(in_shapes), out_shape, fn, jacobian
+        self.construct(name, opts or {})
 
     def get_n_in(self) -> int:
-        return 1
+        return len(self.in_shapes)
 
     def get_n_out(self) -> int:
         return 1
 
     def get_sparsity_in(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.problem.nx, 1)
+        return ca.Sparsity.dense(*self.in_shapes[i])
 
     def get_sparsity_out(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(1, 1)
+        return ca.Sparsity.dense(*self.out_shape)
 
     def eval(self, arg: list) -> list:
-        return [self.problem.value_and_gradient(np.array(arg[0]).ravel())[0]]
+        return [np.reshape(self.fn(np.array(arg[0]).ravel()), self.out_shape)]
 
     def has_jacobian(self) -> bool:
-        return True
+        return self.jac is not None
 
     def get_jacobian(self, name: str, inames: list, onames: list, opts: dict) -> ca.Function:
-        self._jacobian = _LogCondGradient(name, self.problem, opts)  # kept: CasADi holds no Python reference
+        rows = self.out_shape[0] * self.out_shape[1]
+        self._jacobian = _NumpyFunction(name, [self.in_shapes[0], self.out_shape], (rows, self.in_shapes[0][0]),
+                                        self.jac, None, opts)  # kept: CasADi holds no Python reference
         return self._jacobian
 
 
-class _LogCondGradient(ca.Callback):
-    def __init__(self, name: str, problem: "_Problem", opts: dict) -> None:
-        ca.Callback.__init__(self)
-        self.problem = problem
-        self.construct(name, opts)
-
-    def get_n_in(self) -> int:
-        return 2
-
-    def get_n_out(self) -> int:
-        return 1
-
-    def get_sparsity_in(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.problem.nx, 1) if i == 0 else ca.Sparsity.dense(1, 1)
-
-    def get_sparsity_out(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(1, self.problem.nx)
-
-    def eval(self, arg: list) -> list:
-        return [self.problem.value_and_gradient(np.array(arg[0]).ravel())[1][None, :]]
-
-
-class _Torques(ca.Callback):
+class _Torques:
     """``x -> tau`` of the rated joints at the constraint instants, ``Y(q, qd, qdd) pi`` (the reflected-motor
     inverse dynamics with the robot's own parameters), with its exact Jacobian from ``regressor_vjp``."""
 
     def __init__(self, regressor: Regressor, pi: Array, q_start: Array, grid: tuple[Array, Array, Array],
                  joints: Array) -> None:
-        ca.Callback.__init__(self)
         self.regressor, self.pi, self.q_start, self.grid, self.joints = regressor, pi, q_start, grid, joints
         self.n, self.nx, self.N = regressor.n, grid[0].shape[1] * regressor.n, grid[0].shape[0]
-        self.construct("torques", {})
 
-    def get_n_in(self) -> int:
-        return 1
-
-    def get_n_out(self) -> int:
-        return 1
-
-    def get_sparsity_in(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.nx, 1)
-
-    def get_sparsity_out(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.N * len(self.joints), 1)
+    def function(self) -> _NumpyFunction:
+        """The CasADi Function ``x -> tau`` (rows joint-major) with its Jacobian."""
+        return _NumpyFunction("torques", [(self.nx, 1)], (self.N * len(self.joints), 1), self.value, self.jacobian)
 
     def states(self, x: Array) -> tuple[Array, Array, Array]:
         X = x.reshape(self.n, -1)
         Pq, Pqd, Pqdd = self.grid
         return self.q_start + Pq @ X.T, Pqd @ X.T, Pqdd @ X.T
 
-    def eval(self, arg: list) -> list:
-        Y = self.regressor.batch(*self.states(np.array(arg[0]).ravel()))
-        return [(Y @ self.pi)[:, self.joints].T.ravel()]
+    def value(self, x: Array) -> Array:
+        Y = self.regressor.batch(*self.states(x))
+        return (Y @ self.pi)[:, self.joints].T.ravel()
 
     def jacobian(self, x: Array) -> Array:
-        """(N * rated, nx) d tau / d x, rows joint-major as :meth:`eval`."""
+        """(N * rated, nx) d tau / d x, rows joint-major as :meth:`value`."""
         Q, QD, QDD = self.states(x)
         Pq, Pqd, Pqdd = self.grid
         J = np.zeros((len(self.joints), self.N, self.n, Pq.shape[1]))
@@ -334,35 +307,6 @@ class _Torques(ca.Callback):
             gq, gqd, gqdd = self.regressor.vjp_batch(Q, QD, QDD, seed)
             J[r] = gq[:, :, None] * Pq[:, None, :] + gqd[:, :, None] * Pqd[:, None, :] + gqdd[:, :, None] * Pqdd[:, None, :]
         return J.reshape(len(self.joints) * self.N, -1)
-
-    def has_jacobian(self) -> bool:
-        return True
-
-    def get_jacobian(self, name: str, inames: list, onames: list, opts: dict) -> ca.Function:
-        self._jacobian = _TorqueJacobian(name, self, opts)
-        return self._jacobian
-
-
-class _TorqueJacobian(ca.Callback):
-    def __init__(self, name: str, torques: _Torques, opts: dict) -> None:
-        ca.Callback.__init__(self)
-        self.torques = torques
-        self.construct(name, opts)
-
-    def get_n_in(self) -> int:
-        return 2
-
-    def get_n_out(self) -> int:
-        return 1
-
-    def get_sparsity_in(self, i: int) -> ca.Sparsity:
-        return self.torques.get_sparsity_in(0) if i == 0 else self.torques.get_sparsity_out(0)
-
-    def get_sparsity_out(self, i: int) -> ca.Sparsity:
-        return ca.Sparsity.dense(self.torques.N * len(self.torques.joints), self.torques.nx)
-
-    def eval(self, arg: list) -> list:
-        return [self.torques.jacobian(np.array(arg[0]).ravel())]
 
 
 class _Stall(ca.Callback):
@@ -557,13 +501,14 @@ def optimise_excitation(robot: Any, *, period: float = DEFAULT_PERIOD, harmonics
         lbg.append(np.concatenate([lo[j] * ones for j in range(n)]))
         ubg.append(np.concatenate([hi[j] * ones for j in range(n)]))
     rated = np.flatnonzero(np.isfinite(lim.tau_max))
-    torques = None
+    torques = None  # the callbacks must outlive the solver: CasADi holds no Python reference
     if rated.size:
-        torques = _Torques(reg, standard_parameters(desc), q_start, grid, rated)
+        torques = _Torques(reg, standard_parameters(desc), q_start, grid, rated).function()
         g.append(torques(x))
         lbg.append(np.concatenate([-_GRID_MARGIN * lim.tau_max[j] * ones for j in rated]))
         ubg.append(np.concatenate([_GRID_MARGIN * lim.tau_max[j] * ones for j in rated]))
-    objective = _LogCond(problem)
+    objective = _NumpyFunction("log_cond", [(problem.nx, 1)], (1, 1), lambda v: problem.value_and_gradient(v)[0],
+                               lambda v: problem.value_and_gradient(v)[1][None, :])
     g_all = ca.vertcat(*g)
     stall = _Stall(problem.nx, g_all.numel())
     nlp = {"x": x, "f": objective(x), "g": g_all}
