@@ -72,6 +72,8 @@ DATA_RANK_TOL = 1e-7
 #: Most reweightings of WLS (the per-joint deviations re-estimated from the WLS residuals, until they move by
 #: less than 1 %).
 WLS_PASSES = 5
+#: Smallest per-joint noise deviation, relative to the joint's RMS torque.
+SIGMA_FLOOR = 1e-6
 #: Weight of the distance to the robot file's parameters in the consistent fit (relative to the fit's cost,
 #: which is a squared relative error: 1 % is 1e-4).
 PRIOR_WEIGHT = 1e-6
@@ -237,17 +239,18 @@ def least_squares(reg: Regression, beta_prior: Array) -> tuple[Fit, Fit, Array, 
 
 
 def _joint_sigma(reg: Regression, r: Array, nb: int) -> Array:
-    """(n,) per-joint residual deviations, each joint's degrees of freedom its share of ``m - nb``; a joint
-    without residual (exact data) gets the smallest of the others."""
+    """(n,) per-joint residual deviations, each joint's degrees of freedom its share of ``m - nb``, at least
+    :data:`SIGMA_FLOOR` of the joint's RMS torque (exact data leave residuals of rounding, whose ratios would
+    weight the joints at random); a joint without equations gets 1."""
     m = r.size
-    sigma = np.full(reg.n, math.nan)
+    sigma = np.ones(reg.n)
     for j in range(reg.n):
         rows = reg.rows_of(j)
         dof = rows.size - nb * rows.size / m
         if dof > 0:
-            sigma[j] = math.sqrt(r[rows] @ r[rows] / dof)
-    ok = np.isfinite(sigma) & (sigma > 0)
-    return np.where(ok, sigma, np.min(sigma[ok]) if np.any(ok) else 1.0)
+            floor = SIGMA_FLOOR * math.sqrt(reg.tau[rows] @ reg.tau[rows] / rows.size)
+            sigma[j] = max(math.sqrt(r[rows] @ r[rows] / dof), floor, 1e-300)
+    return sigma
 
 
 def _std(W: Array, r: Array, dof: int) -> Array:

@@ -9,12 +9,15 @@ The steps of :func:`prepare_samples`, each a rule stated here and reported in :c
    power spectrum (Hann window, segments of up to :data:`WELCH_SECONDS` s, the linear trend removed), its
    noise floor the median of the spectrum over the upper half of the band (a smooth trajectory puts
    nothing there), and the joint's band edge the highest frequency at which the spectrum stands
-   :data:`SNR_FACTOR` (20 dB) above that floor. The cut-off is the largest band edge over the joints,
-   kept within ``[MIN_CUTOFF_RATIO x rate ... MAX_CUTOFF_RATIO x rate]``: above it the positions are
-   noise, so their derivatives are too. A noise-free log reaches the upper bound.
+   :data:`SNR_FACTOR` (20 dB) above that floor: above it the positions are noise, so their derivatives are
+   too. The cut-off is the largest band edge over the joints, but at most :data:`BAND_RATIO` times the
+   widest motion band (the frequency below which :data:`SIGNAL_POWER` of a joint's position power lies:
+   the rigid-body model explains the motion, not the elastic modes or a controller's corrections above
+   it), kept within ``[MIN_CUTOFF_RATIO x rate ... MAX_CUTOFF_RATIO x rate]``.
 3. **Filtering.** Positions, given velocities and torques pass the same zero-phase filter:
    a Butterworth low-pass of order :data:`FILTER_ORDER` run forward and backward
-   (``scipy.signal.sosfiltfilt``: no phase lag, magnitude squared). The regression applies the same
+   (``scipy.signal.sosfiltfilt``: no phase lag, magnitude squared), each end padded by an odd extension of
+   :data:`PAD_PERIODS` periods of the cut-off. The regression applies the same
    filter to every column of the regressor before it is decimated (*parallel filtering*, Gautier 1997):
    ``F(tau) = F(Y) pi`` holds exactly for a linear filter ``F``, so the filter's own gain and the
    smoothing of the Coulomb friction's step at each velocity reversal are the same on both sides.
@@ -45,7 +48,9 @@ __all__ = [
     "FILTER_ORDER",
     "JITTER_TOL",
     "MAX_CUTOFF_RATIO",
+    "BAND_RATIO",
     "MIN_CUTOFF_RATIO",
+    "SIGNAL_POWER",
     "SNR_FACTOR",
     "LowPass",
     "Preprocessing",
@@ -64,13 +69,20 @@ JITTER_TOL = 1e-3
 WELCH_SECONDS = 8.0
 #: How far above the noise floor a joint's spectrum must stand to count as signal (power ratio, 20 dB).
 SNR_FACTOR = 100.0
+#: The motion's band: the frequency below which this share of a joint's position power (above its floor) lies ...
+SIGNAL_POWER = 0.999
+#: ... and the cut-off is at most this many times the widest joint's band (the rest is what a rigid model does not
+#: explain: joint elasticity, a controller's corrections; the filter's gain is then 1 - 4e-14 over the band).
+BAND_RATIO = 50.0
 #: The cut-off's bounds as fractions of the sampling rate.
 MIN_CUTOFF_RATIO = 0.002
 MAX_CUTOFF_RATIO = 0.4
 #: Butterworth order (doubled by the forward-backward pass).
 FILTER_ORDER = 4
+#: Periods of the cut-off by which the filter pads each end of a signal (an odd extension).
+PAD_PERIODS = 10.0
 #: Periods of the cut-off trimmed at each end of the log, and the most that may be trimmed.
-TRIM_PERIODS = 3.0
+TRIM_PERIODS = 10.0
 MAX_TRIM_FRACTION = 0.05
 #: The decimated rate is at least this many times the cut-off.
 DECIMATION_RATIO = 2.5
@@ -188,20 +200,30 @@ def cutoff_from_spectrum(q: npt.ArrayLike, rate_hz: float) -> tuple[float, tuple
     f, P = scipy.signal.welch(Q, fs=rate_hz, window="hann", nperseg=nper, detrend="linear", axis=0)
     upper = f >= 0.5 * f[-1]
     edges: list[float | None] = []
+    bands: list[float] = []
     for j in range(Q.shape[1]):
         floor = float(np.median(P[upper, j]))
         above = np.flatnonzero(P[:, j] > SNR_FACTOR * floor) if floor > 0 else np.flatnonzero(P[:, j] > 0)
         above = above[above > 0]  # DC is the mean, not motion
         edges.append(float(f[above[-1]]) if above.size else None)
+        power = np.cumsum(np.maximum(P[1:, j] - floor, 0.0))
+        if power[-1] > 0:
+            bands.append(float(f[1 + int(np.searchsorted(power, SIGNAL_POWER * power[-1]))]))
     known = [e for e in edges if e is not None]
     fc = max(known) if known else MIN_CUTOFF_RATIO * rate_hz
+    if bands:
+        fc = min(fc, BAND_RATIO * max(bands))
     return float(min(max(fc, MIN_CUTOFF_RATIO * rate_hz), MAX_CUTOFF_RATIO * rate_hz)), tuple(edges)
 
 
 def lowpass(x: npt.ArrayLike, rate_hz: float, cutoff_hz: float, order: int = FILTER_ORDER) -> Array:
     """Zero-phase Butterworth low-pass of ``x`` (N, ...) along axis 0 (``scipy.signal.sosfiltfilt``)."""
     sos = scipy.signal.butter(order, cutoff_hz, btype="low", fs=rate_hz, output="sos")
-    return scipy.signal.sosfiltfilt(sos, np.asarray(x, dtype=float), axis=0)
+    X = np.asarray(x, dtype=float)
+    # padded (odd extension) by PAD_PERIODS periods of the cut-off, not scipy's default of a few samples, so the
+    # filter's start-up has died out before the log begins
+    pad = min(X.shape[0] - 1, int(math.ceil(PAD_PERIODS * rate_hz / cutoff_hz)))
+    return scipy.signal.sosfiltfilt(sos, X, axis=0, padlen=pad)
 
 
 def derivative(x: npt.ArrayLike, rate_hz: float) -> Array:
