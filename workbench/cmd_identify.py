@@ -231,6 +231,10 @@ def _identify_warnings(desc: Any, result: Any) -> None:
     import numpy as np
 
     eq = result.equations
+    pre = result.preprocessing
+    if pre is not None and pre.jitter > 5:
+        _warn("identify", f"a time step is {1 + pre.jitter:.3g} times the median: the log has gaps, which the "
+                          "resampling bridges with a cubic spline (split the log if they are long)")
     for j, name in enumerate(desc.joint_names):
         total = eq["fit"][j] + eq["at_rest_fit"][j]
         if total and eq["at_rest_fit"][j] > 0.5 * total:

@@ -119,7 +119,7 @@ def rest_speeds(qd: Array) -> Array:
 
 
 #: Largest regressor array filtered at once, in values (the columns go through the filter in groups this size).
-FILTER_BLOCK = 20_000_000
+FILTER_BLOCK = 10_000_000
 
 
 def base_regressor(regressor: Regressor, base: BaseParameters, samples: Samples) -> Array:
