@@ -15,6 +15,7 @@ The consistent fit's standard parameters are the ones a robot file can hold
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -266,11 +267,5 @@ def identify_log(robot: Any, table: JointTable, *, cutoff_hz: float | None = Non
     samples, info = prepare_samples(table.t, table["q"], table["tau"], table["qd"] if "qd" in table else None,
                                     cutoff_hz=cutoff_hz, decimation=decimation)
     result = identify(robot, samples, holdout=holdout, regressor=regressor, base=base, progress=progress)
-    return _with(result, preprocessing=info)
-
-
-def _with(result: Identification, **changes: Any) -> Identification:
-    import dataclasses
-
-    return dataclasses.replace(result, **changes)
+    return dataclasses.replace(result, preprocessing=info)
 
