@@ -23,6 +23,7 @@ from model.version import __version__
 
 from . import cmd_design, cmd_fmu, cmd_model, cmd_sweep, cmd_track
 from . import cmd_teach, cmd_workspace  # teach page and workspace figure
+from . import cmd_identify  # excitation and identification
 from . import cmd_retime  # time-optimal retiming
 from .args import ArgumentsError, OneLineParser, UsageError, add_no_plots, in_flag_terms
 from .outputs import check_out_dir
@@ -68,6 +69,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     cmd_workspace.register(sub)
     cmd_sweep.register(sub, full=only in (None, "sweep"))
     cmd_retime.register(sub)
+    cmd_identify.register(sub)
     p = sub.add_parser("demo", help="the whole workbench end to end on one robot: design, FMU, closed loop, report")
     p.add_argument("--robot", default="scara", help="built-in name or TOML file (default scara)")
     p.add_argument("--out", default="out", help="output folder (default out/)")

@@ -4,7 +4,8 @@ Steps: build the model (compiled dynamics), design decentralised PD and
 computed-torque loops, export and validate the plant FMU, run the reference
 task (the seed's pick-and-place on the SCARA) closed loop through the FMU and
 compare it with the pure Python closed loop, retime the task within the motor
-limits and track it, run a robustness sweep, animate the arm, and write
+limits and track it, run a robustness sweep, identify the arm from a simulated excitation log,
+animate the arm, and write
 ``report.md`` / ``report.html`` with every number and plot.
 """
 
@@ -31,6 +32,7 @@ from .report import Report
 from .sections import (design_section, fmu_section, motion_section, robot_section, task_section, torque_limit_section,
                        tracking_section)
 from .report_retime import retime_section
+from .report_identify import identification_section
 from .report_sweep import sweep_section
 from .workspace import workspace_section
 
@@ -90,7 +92,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     gif = gif and plots
-    progress = Progress(10 if gif else 9, stream)
+    progress = Progress(11 if gif else 10, stream)
     files: list[Path] = []
 
     def warn(line: str) -> None:
@@ -157,6 +159,9 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     progress.step("a robustness sweep: computed torque over payload x friction, compiled loops on Dask")
     files += sweep_section(report, out, robot_name, plots=plots, rate_hz=rate_hz, bandwidth=bandwidth,
                            note=progress.note)
+
+    progress.step("identifying the arm from a simulated excitation log (regressor, excitation, consistent fit)")
+    files += identification_section(report, out, robot, plots=plots, note=progress.note)
 
     if gif:
         progress.step("animating the arm along the closed-loop motion")

@@ -39,14 +39,14 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..chain import build_chain
+from ..chain import Chain, build_chain
 from ..description import RobotDescription
 from ..kinematics import joint_motion
 from .lagrange import gravity_in_frame0
 from .motors import friction_sx
 from .parameters import SymbolicParameters, inertia_matrix_sx
 
-__all__ = ["rne_sx"]
+__all__ = ["forward_pass", "rne_sx"]
 
 
 def _body_wrench(m: Any, c_i: Any, I_i: Any, w_i: Any, wd_i: Any, vd_i: Any) -> tuple[ca.SX, ca.SX]:
@@ -54,6 +54,38 @@ def _body_wrench(m: Any, c_i: Any, I_i: Any, w_i: Any, wd_i: Any, vd_i: Any) -> 
     F = m * (ca.cross(wd_i, c_i) + ca.cross(w_i, ca.cross(w_i, c_i)) + vd_i)
     N = I_i @ wd_i + ca.cross(w_i, I_i @ w_i)
     return F, N
+
+
+def forward_pass(chain: Chain, q: Any, qd: Any, qdd: Any, vd0: Any) -> tuple[list, list, list, list]:
+    """The forward recursion of Newton-Euler: per body i, ``(A_i, w_i, wd_i, vd_i)`` (body-i axes).
+
+    ``A_i`` is the (4, 4) pose of body i in body i-1, ``w_i``, ``wd_i`` its angular velocity and acceleration and
+    ``vd_i`` the linear acceleration of its origin; ``vd0`` is that of frame 0 (``-g_0``: gravity as a base
+    acceleration). The formulas are those of the module docstring.
+    """
+    axes = [ca.DM(a) for a in chain.axes]
+    w = ca.SX.zeros(3, 1)
+    wd = ca.SX.zeros(3, 1)
+    vd = vd0
+    A_list, w_list, wd_list, vd_list = [], [], [], []
+    for i in range(chain.n):
+        A = ca.DM(chain.placements[i]) @ joint_motion(chain.axes[i], q[i], chain.revolute[i])
+        Rt = A[0:3, 0:3].T
+        r = Rt @ A[0:3, 3]
+        a = axes[i]
+        wp, wdp = Rt @ w, Rt @ wd
+        vd = Rt @ vd + ca.cross(wdp, r) + ca.cross(wp, ca.cross(wp, r))
+        if chain.revolute[i]:
+            w = wp + a * qd[i]
+            wd = wdp + a * qdd[i] + ca.cross(wp, a * qd[i])
+        else:
+            w, wd = wp, wdp
+            vd = vd + a * qdd[i] + 2 * ca.cross(wp, a * qd[i])
+        A_list.append(A)
+        w_list.append(w)
+        wd_list.append(wd)
+        vd_list.append(vd)
+    return A_list, w_list, wd_list, vd_list
 
 
 def rne_sx(
@@ -92,29 +124,8 @@ def rne_sx(
     full = motor_model == "full"
     axes = [ca.DM(a) for a in chain.axes]
 
-    w = ca.SX.zeros(3, 1)
-    wd = ca.SX.zeros(3, 1)
-    vd = -gravity_in_frame0(chain.base, params.gravity)
-    A_list, w_list, wd_list, vd_list = [], [], [], []
-    wd_prev = []  # wd of body i-1 (frame i-1 axes), for the spin equation of rotor i
-    for i in range(n):
-        wd_prev.append(wd)
-        A = ca.DM(chain.placements[i]) @ joint_motion(chain.axes[i], q[i], chain.revolute[i])
-        Rt = A[0:3, 0:3].T
-        r = Rt @ A[0:3, 3]
-        a = axes[i]
-        wp, wdp = Rt @ w, Rt @ wd
-        vd = Rt @ vd + ca.cross(wdp, r) + ca.cross(wp, ca.cross(wp, r))
-        if chain.revolute[i]:
-            w = wp + a * qd[i]
-            wd = wdp + a * qdd[i] + ca.cross(wp, a * qd[i])
-        else:
-            w, wd = wp, wdp
-            vd = vd + a * qdd[i] + 2 * ca.cross(wp, a * qd[i])
-        A_list.append(A)
-        w_list.append(w)
-        wd_list.append(wd)
-        vd_list.append(vd)
+    A_list, w_list, wd_list, vd_list = forward_pass(chain, q, qd, qdd, -gravity_in_frame0(chain.base, params.gravity))
+    wd_prev = [ca.SX.zeros(3, 1), *wd_list[:-1]]  # wd of body i-1 (frame i-1 axes), for the spin equation of rotor i
 
     R_tip, t_tip = ca.DM(chain.tip[:3, :3]), ca.DM(chain.tip[:3, 3])
     tau = [None] * n
