@@ -136,8 +136,6 @@ class LinkDescription:
     # the joint; com and inertia (about the com) are in link frame i.
     origin: tuple[float, ...] | None = None
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    # Largest joint speed (rad/s or m/s, joint side); None when the file states none.
-    velocity_limit: float | None = None
     # Where viscous_friction and coulomb_friction come from: FROM_FILE, FROM_URDF or FROM_DEFAULT each.
     friction_source: tuple[str, str] = field(default=(FROM_DEFAULT, FROM_DEFAULT), compare=False)
 

@@ -16,7 +16,7 @@ import socket
 from model.errors import InputError, WorkbenchError
 
 __all__ = ["ArgumentsError", "OneLineParser", "UsageError", "FLAG_OF", "add_no_plots", "add_spec_args", "bounded_int", "controller_kind", "finite_or_fail",
-           "host_address", "in_flag_terms", "positive_float", "scheduler_address"]
+           "host_address", "in_flag_terms", "per_joint_flag", "positive_float", "scheduler_address"]
 
 #: The library's parameter names (the ``parameter`` field of :class:`model.errors.WorkbenchError`) and the
 #: flag a user of ``manip`` typed for each; :func:`in_flag_terms` applies it at the CLI boundary.
@@ -182,3 +182,24 @@ def add_no_plots(p: argparse.ArgumentParser) -> None:
     """``--no-plots``, for every command that draws: numbers and JSON only, no PNG or GIF (scripted runs)."""
     p.add_argument("--no-plots", action="store_true",
                    help="write no PNG or GIF (numbers and JSON only; drawing is most of a short run's time)")
+
+
+def per_joint_flag(text: str | None, n: int, flag: str, unit: str) -> list[float] | None:
+    """A flag's value ``"V"`` (every joint) or ``"V1,V2,...,Vn"`` as n positive numbers (``inf``: no limit), or None.
+
+    ``--velocity-limit`` and ``--acceleration-limit`` of ``manip retime`` and ``manip excite``."""
+    if text is None:
+        return None
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise UsageError(f"{flag}: expected a number or {n} comma-separated numbers ({unit}), got {text!r}") from None
+    if len(values) == 1:
+        values *= n
+    if len(values) != n:
+        raise UsageError(f"{flag}: expected 1 or {n} values (one per joint), got {len(values)} in {text!r}")
+    bad = [v for v in values if not v > 0.0]
+    if bad:
+        raise UsageError(f"{flag}: expected limits > 0 {unit} (inf for none), got {bad[0]!r}")
+    return values

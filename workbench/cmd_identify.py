@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from .args import UsageError, add_no_plots
+from .args import UsageError, add_no_plots, per_joint_flag
 from .formatting import format_table
 from .outputs import check_out_dir, out_dir, out_file, save_figure, write_json
 
@@ -34,19 +34,6 @@ def _say(command: str):
 
 def _warn(command: str, line: str) -> None:
     print(f"manip {command}: warning: {line}", file=sys.stderr, flush=True)
-
-
-def _limits_flag(text: str | None, n: int, flag: str) -> list[float] | None:
-    """A ``--qd-max`` style value: one number for every joint or n comma-separated numbers, each > 0."""
-    if text is None:
-        return None
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) not in (1, n) or not all(math.isfinite(v) and v > 0 for v in values):
-        raise UsageError(f"{flag}: expected one positive number or {n} comma-separated ones (one per joint), got {text!r}")
-    return values
 
 
 def run_excite(args: argparse.Namespace) -> int:
@@ -65,16 +52,18 @@ def run_excite(args: argparse.Namespace) -> int:
         raise UsageError(f"--rate: expected a positive rate giving at most 5,000,000 samples, got {args.rate!r}")
     if not (math.isfinite(args.torque_margin) and 0 < args.torque_margin <= 1):
         raise UsageError(f"--torque-margin: expected a fraction in (0, 1], got {args.torque_margin!r}")
+    if args.seed < 0:
+        raise UsageError(f"--seed: expected a whole number >= 0, got {args.seed!r}")
     if args.max_iter < 1:
         raise UsageError(f"--max-iter: expected a whole number >= 1, got {args.max_iter!r}")
     path = out_file(args.output, "--output", create=False)
     robot = load_robot(args.robot)
     desc = robot.description
-    qd_max = _limits_flag(args.qd_max, desc.n, "--qd-max")
-    qdd_max = _limits_flag(args.qdd_max, desc.n, "--qdd-max")
+    qd_max = per_joint_flag(args.velocity_limit, desc.n, "--velocity-limit", "rad/s or m/s")
+    qdd_max = per_joint_flag(args.acceleration_limit, desc.n, "--acceleration-limit", "rad/s^2 or m/s^2")
     limits = excitation_limits(desc, qd_max, qdd_max, args.torque_margin)
     for note in limits.notes:
-        _warn("excite", f"{note} (set --qd-max / --qdd-max)")
+        _warn("excite", f"{note} (set --velocity-limit / --acceleration-limit, or the robot file's velocity_limit / acceleration_limit)")
     say = _say("excite")
     reg = Regressor(desc)
     reg.compile(progress=say)
@@ -266,10 +255,12 @@ def register(subparsers: Any) -> None:
     p.add_argument("--harmonics", type=int, default=5, metavar="L", help="harmonics per joint (default 5)")
     p.add_argument("--periods", type=int, default=1, metavar="K", help="periods written to the CSV (default 1)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ", help="sampling rate of the CSV (default 1000)")
-    p.add_argument("--qd-max", default=None, metavar="V[,V...]",
-                   help="joint speed limits, rad/s or m/s: one for all joints or one per joint (default 1 rad/s, 0.25 m/s)")
-    p.add_argument("--qdd-max", default=None, metavar="A[,A...]",
-                   help="joint acceleration limits, rad/s^2 or m/s^2 (default 4 rad/s^2, 1 m/s^2)")
+    p.add_argument("--velocity-limit", default=None, metavar="V[,V...]",
+                   help="joint speed limits, rad/s or m/s: one for all joints or one per joint (default: the robot "
+                        "file's velocity_limit, else 1 rad/s, 0.25 m/s)")
+    p.add_argument("--acceleration-limit", default=None, metavar="A[,A...]",
+                   help="joint acceleration limits, rad/s^2 or m/s^2 (default: the robot file's acceleration_limit, "
+                        "else 4 rad/s^2, 1 m/s^2)")
     p.add_argument("--torque-margin", type=float, default=0.9, metavar="X",
                    help="share of each motor's rated torque the excitation may use (default 0.9)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random start (default 0)")

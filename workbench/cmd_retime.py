@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .args import UsageError, add_no_plots, bounded_int
+from .args import UsageError, add_no_plots, bounded_int, per_joint_flag
 from .outputs import check_out_dir, out_dir, save_figure, write_json
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -26,29 +26,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from model.robot import Robot
     from model.tasks import Task
 
-__all__ = ["TRAJECTORY_FILE", "register", "run_retime", "retime_task", "chosen_task", "per_joint_flag"]
+__all__ = ["TRAJECTORY_FILE", "register", "run_retime", "retime_task", "chosen_task"]
 
 #: The trajectory file a retime writes (and ``manip track --trajectory`` reads).
 TRAJECTORY_FILE = "trajectory.csv"
-
-
-def per_joint_flag(text: str | None, n: int, flag: str, unit: str) -> list[float] | None:
-    """A flag's value ``"V"`` (every joint) or ``"V1,V2,...,Vn"`` as n positive numbers (``inf``: no limit)."""
-    if text is None:
-        return None
-    parts = [p.strip() for p in text.split(",")]
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        raise UsageError(f"{flag}: expected a number or {n} comma-separated numbers ({unit}), got {text!r}") from None
-    if len(values) == 1:
-        values *= n
-    if len(values) != n:
-        raise UsageError(f"{flag}: expected 1 or {n} values (one per joint), got {len(values)} in {text!r}")
-    bad = [v for v in values if not v > 0.0]
-    if bad:
-        raise UsageError(f"{flag}: expected limits > 0 {unit} (inf for none), got {bad[0]!r}")
-    return values
 
 
 def _factor(value: float, flag: str) -> float:

@@ -95,8 +95,11 @@ def excitation_plot(result: ExcitationResult, joints: Sequence[str], revolute: S
                                                      (qdd[:, j], -lim.qdd_max[j], lim.qdd_max[j], f"qdd [{u}/s$^2$]"))):
             ax = axes[j, k]
             ax.plot(t, values, lw=0.9)
-            ax.axhline(lo, color="r", ls="--", lw=0.7)
-            ax.axhline(hi, color="r", ls="--", lw=0.7)
+            # a limit far beyond the motion (1e308: none in effect) would squash the curve to a line
+            reach = 10.0 * max(float(np.abs(values).max()), 1e-12)
+            for bound in (lo, hi):
+                if abs(bound) <= reach:
+                    ax.axhline(bound, color="r", ls="--", lw=0.7)
             ax.grid(True, alpha=0.3)
             ax.set_ylabel(f"{joints[j]}\n{label}" if k == 0 else label)
     for ax in axes[-1]:

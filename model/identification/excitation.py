@@ -112,34 +112,49 @@ def _per_joint(value: float | Sequence[float] | None, n: int, name: str) -> Arra
     arr = np.atleast_1d(np.asarray(value, dtype=float))
     if arr.size == 1:
         arr = np.full(n, float(arr[0]))
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise InputError(f"{name}: expected one positive number or {n}, one per joint, got {np.asarray(value).tolist()}")
+    if arr.shape != (n,) or not np.all(arr > 0):
+        raise InputError(f"expected one positive number or {n}, one per joint, got {np.asarray(value).tolist()}",
+                         parameter=name)
     return arr
+
+
+def _joint_limits(desc: Any, given: Array | None, field: str, defaults: tuple[float, float], what: str,
+                  units: tuple[str, str], notes: list[str]) -> Array:
+    """Per joint: the given limit, else the robot file's ``field`` (``velocity_limit``, ``acceleration_limit``),
+    else the default for its kind; a note names the joints that took the default. Every limit must be finite:
+    an excitation is scaled to its limits."""
+    n = desc.n
+    revolute = np.array([lk.is_revolute for lk in desc.links])
+    stated = np.array([np.nan if getattr(lk, field) is None else getattr(lk, field) for lk in desc.links])
+    default = np.where(revolute, defaults[0], defaults[1])
+    chosen = given if given is not None else np.where(np.isnan(stated), default, stated)
+    if given is None and np.isnan(stated).any():
+        joints = [desc.joint_names[j] for j in range(n) if np.isnan(stated[j])]
+        notes.append(f"{desc.name} states no joint {what} limit for {', '.join(joints)}: using {defaults[0]:g} "
+                     f"{units[0]} (revolute) and {defaults[1]:g} {units[1]} (prismatic)")
+    if not np.all(np.isfinite(chosen)):
+        j = int(np.argmin(np.isfinite(chosen)))
+        raise InputError(f"joint {desc.joint_names[j]}: expected a finite {what} limit (an excitation is scaled to "
+                         f"its limits), got {chosen[j]!r}", parameter=field)
+    return chosen
 
 
 def excitation_limits(desc: Any, qd_max: float | Sequence[float] | None = None,
                       qdd_max: float | Sequence[float] | None = None, torque_margin: float = 0.9) -> ExcitationLimits:
-    """The :class:`ExcitationLimits` of a robot description: its box, the given or default speed and
-    acceleration limits, and its motor ratings times ``torque_margin``."""
+    """The :class:`ExcitationLimits` of a robot description: its box; per joint the given speed and
+    acceleration limits, else the robot file's ``velocity_limit`` and ``acceleration_limit``, else
+    :data:`DEFAULT_QD_MAX` and :data:`DEFAULT_QDD_MAX`; its motor ratings times ``torque_margin``."""
     n = desc.n
     if not 0 < torque_margin <= 1:
-        raise InputError(f"torque_margin: expected a fraction in (0, 1], got {torque_margin!r}")
+        raise InputError(f"expected a fraction in (0, 1], got {torque_margin!r}", parameter="torque_margin")
     lim = finite_limits(desc)
     span = lim[1] - lim[0]
     q_min, q_max = lim[0] + POSITION_MARGIN * span, lim[1] - POSITION_MARGIN * span
-    revolute = np.array([lk.is_revolute for lk in desc.links])
-    notes = []
-    given = _per_joint(qd_max, n, "qd_max")
-    if given is None:
-        given = np.where(revolute, DEFAULT_QD_MAX[0], DEFAULT_QD_MAX[1])
-        notes.append(f"{desc.name} states no joint speed limits: using {DEFAULT_QD_MAX[0]:g} rad/s (revolute) and "
-                     f"{DEFAULT_QD_MAX[1]:g} m/s (prismatic)")
-    qd = given
-    given = _per_joint(qdd_max, n, "qdd_max")
-    if given is None:
-        given = np.where(revolute, DEFAULT_QDD_MAX[0], DEFAULT_QDD_MAX[1])
-        notes.append(f"{desc.name} states no joint acceleration limits: using {DEFAULT_QDD_MAX[0]:g} rad/s^2 "
-                     f"(revolute) and {DEFAULT_QDD_MAX[1]:g} m/s^2 (prismatic)")
+    notes: list[str] = []
+    qd = _joint_limits(desc, _per_joint(qd_max, n, "velocity_limit"), "velocity_limit", DEFAULT_QD_MAX, "speed",
+                       ("rad/s", "m/s"), notes)
+    given = _joint_limits(desc, _per_joint(qdd_max, n, "acceleration_limit"), "acceleration_limit", DEFAULT_QDD_MAX,
+                          "acceleration", ("rad/s^2", "m/s^2"), notes)
     tau = np.array([math.inf if lk.torque_limit is None else abs(lk.gear_ratio) * lk.torque_limit * torque_margin
                     for lk in desc.links])
     return ExcitationLimits(q_min=q_min, q_max=q_max, qd_max=qd, qdd_max=given, tau_max=tau, notes=tuple(notes))
@@ -395,11 +410,11 @@ class _Problem:
             grad = (gq.T @ self.Pq + gqd.T @ self.Pqd + gqdd.T @ self.Pqdd).ravel()
         self._cache = (key, value, grad)
         self.evaluations += 1
-        self.history.append(math.exp(value))
+        self.history.append(math.exp(value) if value < 700.0 else math.inf)  # a rank-deficient start: infinite
         now = time.perf_counter()
         if self._progress is not None and now - self._last > 2.0:
             self._last = now
-            self._progress(f"evaluation {self.evaluations}: cond {math.exp(value):.4g} (best {min(self.history):.4g})")
+            self._progress(f"evaluation {self.evaluations}: cond {self.history[-1]:.4g} (best {min(self.history):.4g})")
         return value, grad
 
 

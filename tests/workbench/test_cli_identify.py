@@ -123,9 +123,10 @@ def test_identified_urdf_robot_loads_with_its_urdf(tmp_path):
     (("identify", "puma560", "{log}", "--out", "{out}", "--cutoff", "900"), "--cutoff: 900.0 Hz is not below"),
     (("identify", "puma560", "{log}", "--out", "{log}"), "--out: expected a directory"),
     (("identify", "ur5", "{log}", "--out", "{out}"), "unknown column 'q_joint1'"),
-    (("excite", "puma560", "-o", "{csv}", "--qd-max", "-1"), "--qd-max: expected one positive number or 6"),
+    (("excite", "puma560", "-o", "{csv}", "--velocity-limit", "-1"), "--velocity-limit: expected limits > 0"),
+    (("excite", "puma560", "-o", "{csv}", "--velocity-limit", "inf"), "expected a finite speed limit"),
     (("excite", "puma560", "-o", "{csv}", "--harmonics", "0"), "--harmonics: expected a whole number"),
-    (("excite", "puma560", "-o", "{csv}", "--qdd-max", "1,2"), "--qdd-max: expected one positive number or 6"),
+    (("excite", "puma560", "-o", "{csv}", "--acceleration-limit", "1,2"), "--acceleration-limit: expected 1 or 6 values"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, argv, words):
     names = load_robot("puma560").description.joint_names

@@ -38,7 +38,7 @@ ADDRESS = ("", "\0", "a b", "-1")
 #: The kind of each text argument (by its ``dest``): which hostile values it gets.
 TEXT_KINDS: dict[str, tuple[str, ...]] = {
     "robot": INPUT_PATH, "spec": INPUT_PATH, "fmu": INPUT_PATH, "waypoints": INPUT_PATH, "result": INPUT_PATH,
-    "trajectory": INPUT_PATH,
+    "trajectory": INPUT_PATH, "data": INPUT_PATH,
     "velocity_limit": NUMBER, "acceleration_limit": NUMBER,  # one number, or one per joint with commas
     "out": OUT_DIR, "output": OUT_FILE, "toml": OUT_FILE,
     "controller": NAME, "task": NAME, "platforms": NAME,
@@ -57,7 +57,11 @@ VALID: set[tuple[str, str, str]] = {
     ("retime", "--acceleration-limit", "1e308"),
     ("retime", "--velocity-scale", "1e308"),      # a factor on limits the robot states (planar2r states none)
     ("retime", "--acceleration-scale", "1e308"),
-    ("retime", "--smooth", "0"),                  # 0: the exact time law, unaveraged (documented)     # an internal step longer than any communication step: one RK4 step each
+    ("retime", "--smooth", "0"),
+    ("excite", "--seed", "0"),
+    ("excite", "--velocity-limit", "1e308"),      # a limit no motion reaches: the position box bounds it
+    ("excite", "--acceleration-limit", "1e308"),
+    ("identify", "--holdout", "0"),               # no held-out part: every sample fits                  # 0: the exact time law, unaveraged (documented)     # an internal step longer than any communication step: one RK4 step each
 }
 #: Flags of the base command line that a flag under test cannot be combined with (dropped for its cases).
 CONFLICTS: dict[tuple[str, str], tuple[str, ...]] = {
@@ -65,7 +69,7 @@ CONFLICTS: dict[tuple[str, str], tuple[str, ...]] = {
 }
 
 
-def _base(command: str, tmp: Path, fmu_file: Path, spec_file: Path) -> list[str]:
+def _base(command: str, tmp: Path, fmu_file: Path, spec_file: Path, data_file: Path) -> list[str]:
     """A cheap valid command line of ``command`` (a flag under test replaces or is appended to it)."""
     return {
         "robots": ["robots"],
@@ -80,6 +84,9 @@ def _base(command: str, tmp: Path, fmu_file: Path, spec_file: Path) -> list[str]
         "workspace": ["workspace", "planar2r", "-o", str(tmp / "out" / "ws.png"), "--samples=100"],
         "sweep": ["sweep", str(spec_file), "--out", str(tmp / "out"), "--workers=1", "--no-plots"],
         "retime": ["retime", "planar2r", "--out", str(tmp / "out"), "--grid=50"],
+        "excite": ["excite", "planar2r", "-o", str(tmp / "out" / "e.csv"), "--period=2", "--harmonics=1",
+                   "--max-iter=3", "--rate=100"],
+        "identify": ["identify", "planar2r", str(data_file), "--out", str(tmp / "out"), "--no-plots"],
         "demo": ["demo", "--robot", "planar2r", "--out", str(tmp / "out"), "--no-plots", "--no-gif"],
     }[command]
 
@@ -159,6 +166,23 @@ def spec_file(tmp_path_factory) -> Path:
     return path
 
 
+@pytest.fixture(scope="module")
+def data_file(tmp_path_factory) -> Path:
+    """A short identification log of planar2r: a two-sine motion and its inverse dynamics."""
+    import numpy as np
+
+    from model import load_robot
+    from model.joint_table import write_joint_table
+
+    robot = load_robot("planar2r")
+    t = np.arange(400) * 5e-3
+    w = np.array([[1.3], [2.1]])
+    Q, QD, QDD = (np.sin(w * t).T * 0.5, (w * np.cos(w * t)).T * 0.5, (-w * w * np.sin(w * t)).T * 0.5)
+    tau = np.array([robot.rne(q, qd, qdd) for q, qd, qdd in zip(Q, QD, QDD)])
+    path = tmp_path_factory.mktemp("data") / "log.csv"
+    return write_joint_table(path, t, {"q": Q, "tau": tau}, robot.description.joint_names)
+
+
 def _fill(value: str, tmp: Path) -> str:
     (tmp / "a_dir").mkdir(exist_ok=True)
     (tmp / "a_file.txt").write_text("not what was asked for\n")
@@ -200,10 +224,10 @@ class _SetEvent:
 @pytest.mark.parametrize(("command", "flag", "dest", "value"), CASES,
                          ids=[f"{c} {f or d}={v!r}" for c, f, d, v in CASES])
 def test_a_hostile_value_is_refused_in_one_line(command, flag, dest, value, tmp_path, fmu_file, spec_file,
-                                                monkeypatch):
+                                                data_file, monkeypatch):
     monkeypatch.chdir(tmp_path)
     value = _fill(value, tmp_path)
-    argv = _argv(_base(command, tmp_path, fmu_file, spec_file), command, flag, dest, value)
+    argv = _argv(_base(command, tmp_path, fmu_file, spec_file, data_file), command, flag, dest, value)
     status, err = run_cli(argv, monkeypatch)
     assert "Traceback" not in err, err
     lines = err.splitlines()
