@@ -31,7 +31,7 @@ from .trajectory import JointPath, Trajectory
 if TYPE_CHECKING:  # pragma: no cover
     from .description import RobotDescription
 
-__all__ = ["CONSISTENCY_TOL", "GROUPS", "TrajectoryFileError", "check_consistency", "read_trajectory",
+__all__ = ["CONSISTENCY_TOL", "GROUPS", "VELOCITY_RTOL", "TrajectoryFileError", "check_consistency", "read_trajectory",
            "sampled_trajectory", "write_trajectory"]
 
 Array = npt.NDArray[np.float64]
@@ -42,8 +42,11 @@ GROUPS = ("q", "qd", "qdd")
 CONSISTENCY_TOL = 0.01
 #: Peak speeds below this share of the fastest joint's count as that share (a joint at rest is held to it).
 _SPEED_FLOOR = 1e-3
-#: Relative slack of the joint-limit and velocity-limit checks (a sample exactly on a limit, rounded).
+#: Relative slack of the joint-limit check (a sample exactly on a limit, rounded).
 _LIMIT_RTOL = 1e-9
+#: Relative slack of the velocity-limit check (a sample exactly on its limit, rounded: a time-optimal
+#: motion runs along its speed limit).
+VELOCITY_RTOL = 1e-9
 
 
 class TrajectoryFileError(JointTableError):
@@ -128,7 +131,7 @@ def read_trajectory(path: str | Path, description: "RobotDescription") -> Trajec
         raise TrajectoryFileError(f"{where} line {k + 2}: q_{description.joint_names[j]} = {float(q[k, j])!r} outside "
                                   f"qlim [{lo[j]:g}, {hi[j]:g}] of joint {j + 1}")
     vmax = np.array([math.inf if lk.velocity_limit is None else lk.velocity_limit for lk in description.links])
-    fast = np.abs(qd) > vmax * (1.0 + _LIMIT_RTOL)
+    fast = np.abs(qd) > vmax * (1.0 + VELOCITY_RTOL)
     if np.any(fast):
         k, j = np.argwhere(fast)[0]
         state = "the start" if k == 0 else "a sample"

@@ -92,15 +92,19 @@ def test_every_listed_arm_matches_pinocchio_rnea(name):
     rne = robot.dynamics.functions.rne  # the model the compiled C is generated from (tests/model/test_codegen.py)
     p = robot.dynamics.parameters.vector
     for k, (q, qd, qdd) in enumerate(_states(robot, seed=len(name))):
+        # Pinocchio's rnea leaves out the URDF's <dynamics damping friction>, which our rne includes as the
+        # joints' friction (tests/model/test_urdf.py): F = damping qd + friction sign(qd), from its model
+        index = np.arange(robot.n) if chain is None else np.asarray(chain)
+        friction = ref.damping[index] * qd + ref.friction[index] * np.sign(qd)
         if chain is None:
             qp = pin_q(ref, q)
-            expected = pin.rnea(ref, data, qp, qd, qdd)
+            expected = pin.rnea(ref, data, qp, qd, qdd) + friction
         else:
             full = [np.zeros(ref.nv) for _ in range(3)]
             for f, ours_v in zip(full, (q, qd, qdd)):
                 f[chain] = ours_v
             qp = pin_q(ref, full[0])
-            expected = pin.rnea(ref, data, qp, full[1], full[2])[chain]
+            expected = pin.rnea(ref, data, qp, full[1], full[2])[chain] + friction
         ours = np.array(rne(q, qd, qdd, p)).ravel()
         scale = max(1.0, float(np.max(np.abs(expected))))
         np.testing.assert_allclose(ours, expected, rtol=0, atol=RTOL * scale)

@@ -73,7 +73,7 @@ def test_retime_defaults():
     from model.retime.result import JUMP_STEP
     from model.retime.path import MIN_SEGMENT_INTERVALS
     from model.retime.solver import REFINE_RTOL
-    from model.trajectory_file import CONSISTENCY_TOL
+    from model.trajectory_file import CONSISTENCY_TOL, VELOCITY_RTOL
 
     # 10 % of each motor's torque left to the tracking loop: computed torque at 50 rad/s, 1 kHz needs ~7 %
     # of a switch (Kd h) once the switches are averaged over one period
@@ -88,3 +88,5 @@ def test_retime_defaults():
     assert REFINE_RTOL == 1e-7
     # a trajectory file's q, qd, qdd agree to 1 % of the joint's peak speed per interval (deg instead of rad: 5700 %)
     assert CONSISTENCY_TOL == 0.01
+    # a sample on its speed limit, rounded (the retime's file slows a segment the 1 ms average would take past it)
+    assert VELOCITY_RTOL == 1e-9
