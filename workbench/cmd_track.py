@@ -93,7 +93,7 @@ def run_track(args: argparse.Namespace) -> int:
     plant = robot if mismatch.is_exact else plant_with_mismatch(robot, mismatch)
     controller = design.controller(args.rate, saturate=not args.no_saturation)
     progress = ProgressLine("track", sys.stderr)
-    if args.task is None and args.waypoints is None:  # said when the run starts: a refused request stays one line
+    if args.task is None and args.waypoints is None and args.trajectory is None:  # said when the run starts
         progress = _noted(progress, f"manip track: no --task: following {task!r} ({reference_task_rule(robot)})")
     result = simulate_tracking(plant, controller, traj, progress=progress)
     met = result.metrics()

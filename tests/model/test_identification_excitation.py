@@ -75,7 +75,19 @@ def test_optimiser_lowers_the_condition_number_within_the_limits():
     assert result.condition_number < 0.2 * result.initial_condition_number
     assert _cond(rob, base, result.trajectory) == pytest.approx(result.condition_number, rel=0.2)
     _within(result)
-    assert any("no joint speed limits" in note for note in result.limits.notes)
+    assert any("no joint speed limit for shoulder, elbow, quill, wrist" in note for note in result.limits.notes)
+
+
+def test_the_robot_files_speed_limits_are_used_where_stated():
+    """The panda's URDF states each joint's <limit velocity> (2.175 and 2.61 rad/s): the excitation keeps to
+    them; it states no acceleration limit, so those take the default and the note names every joint."""
+    desc = robot("panda").description
+    lim = excitation_limits(desc)
+    stated = [lk.velocity_limit for lk in desc.links]
+    assert None not in stated and sorted(set(stated)) == [2.175, 2.61]
+    np.testing.assert_array_equal(lim.qd_max, stated)
+    assert [n for n in lim.notes if "speed" in n] == []
+    assert any(", ".join(desc.joint_names) in n for n in lim.notes if "acceleration" in n)
 
 
 def test_given_limits_are_kept_and_no_default_is_announced():

@@ -242,7 +242,7 @@ def test_the_matrix_covers_every_command_and_argument():
     commands = set(_subparsers())
     assert {"robots", "info", "track", "sweep", "demo", "teach", "validate-fmu"} <= commands
     for command in commands:
-        _base(command, Path("/tmp"), Path("x.fmu"), Path("s.toml"))  # KeyError: a command without a base
+        _base(command, Path("/tmp"), Path("x.fmu"), Path("s.toml"), Path("d.csv"))  # KeyError: a command without one
     covered = {(c, f or d) for c, f, d, _ in CASES}
     for flag in ("--bandwidth", "--payload", "--mass-scale", "--segment-time", "--out", "robot"):
         assert ("track", flag) in covered
@@ -250,9 +250,9 @@ def test_the_matrix_covers_every_command_and_argument():
     assert len(CASES) > 300
 
 
-def test_a_base_command_line_succeeds(tmp_path, fmu_file, spec_file, monkeypatch):
+def test_a_base_command_line_succeeds(tmp_path, fmu_file, spec_file, data_file, monkeypatch):
     """Negative control: the cheap base command lines themselves run (so a refusal above is the value's)."""
     monkeypatch.chdir(tmp_path)
-    for command in ("info", "track", "validate-fmu", "workspace", "teach"):
-        status, err = run_cli(_base(command, tmp_path, fmu_file, spec_file), monkeypatch)
+    for command in ("info", "track", "validate-fmu", "workspace", "teach", "retime", "excite", "identify"):
+        status, err = run_cli(_base(command, tmp_path, fmu_file, spec_file, data_file), monkeypatch)
         assert status == 0 and "Traceback" not in err, (command, err)
