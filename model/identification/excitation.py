@@ -438,7 +438,9 @@ def _initial_guess(rng: np.random.Generator, n: int, L: int, q_start: Array, lim
     for j in range(n):
         dq, qd, qdd = Pq @ X[j], Pqd @ X[j], Pqdd @ X[j]
         room_hi, room_lo = limits.q_max[j] - q_start[j], q_start[j] - limits.q_min[j]
-        ratios = [limits.qd_max[j] / max(np.abs(qd).max(), 1e-300), limits.qdd_max[j] / max(np.abs(qdd).max(), 1e-300)]
+        with np.errstate(over="ignore"):  # a limit of 1e308 over a small peak: inf, as good as no limit
+            ratios = [limits.qd_max[j] / max(np.abs(qd).max(), 1e-300),
+                      limits.qdd_max[j] / max(np.abs(qdd).max(), 1e-300)]
         if dq.max() > 0:
             ratios.append(room_hi / dq.max())
         if dq.min() < 0:
@@ -563,7 +565,8 @@ def _fit_fine_grid(X: Array, q_start: Array, period: float, L: int, lim: Excitat
     notes = []
     for j in range(X.shape[0]):
         dq, qd, qdd = Pq @ X[j], Pqd @ X[j], Pqdd @ X[j]
-        ratios = [1.0, lim.qd_max[j] / np.abs(qd).max(), lim.qdd_max[j] / np.abs(qdd).max()]
+        ratios = [1.0] + [bound / peak for bound, peak in ((lim.qd_max[j], np.abs(qd).max()),
+                                                           (lim.qdd_max[j], np.abs(qdd).max())) if peak > 0]
         if dq.max() > 0:
             ratios.append((lim.q_max[j] - q_start[j]) / dq.max())
         if dq.min() < 0:
