@@ -21,6 +21,7 @@ from control_design.controllers import Controller
 from control_design.errors import DesignSpecError, SimulationDivergedError
 from control_design.reference import Reference
 from model.compiled_plant import compiled_plant
+from model.drive_train import drive_layout, equilibrium_state
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -76,17 +77,32 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
     steps, t, substeps = sched.steps, sched.t, sched.substeps
     Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
     run = compiled_plant(plant).run(plant.parameters.vector)
-    run.start(np.concatenate([sched.q0, sched.qd0]))
+    lay = drive_layout(plant.description)
+    G = np.asarray(plant.gear_ratio, dtype=float)
+    x0 = np.concatenate([sched.q0, sched.qd0])
+    if lay.nx > 2 * n:  # drive trains: start in static equilibrium (gears deflected, loops at rest), as Modelica's r3
+        x0 = equilibrium_state(plant.description, sched.q0, plant.gravload(sched.q0))
+        x0[n:2 * n] = sched.qd0
+    run.start(x0)
     x = run.x
     Q = np.empty((steps + 1, n))
     QD = np.empty((steps + 1, n))
     TAU = np.empty((steps + 1, n))
     controller.reset()
+    motor = getattr(controller, "measures_motor", False)
+    if motor:  # a motor-side controller starts holding the arm where it is
+        qm, qdm = lay.motor_state(x, G)
+        controller.hold_from(qm, qdm, Reference(Qr[0], QDr[0], QDDr[0]), plant.gravload(sched.q0) / G)
     start = time.perf_counter()
     try:
         for k in range(steps + 1):
-            Q[k], QD[k] = x[:n], x[n:]
-            tau_m = controller.update(float(t[k]), Q[k].copy(), QD[k].copy(), Reference(Qr[k], QDr[k], QDDr[k]))
+            Q[k], QD[k] = x[:n], x[n:2 * n]
+            ref = Reference(Qr[k], QDr[k], QDDr[k])
+            if motor:
+                qm, qdm = lay.motor_state(x, G)
+                tau_m = controller.update_motor(float(t[k]), Q[k].copy(), QD[k].copy(), qm, qdm, ref)
+            else:
+                tau_m = controller.update(float(t[k]), Q[k].copy(), QD[k].copy(), ref)
             TAU[k] = tau_m
             if k == steps:
                 break

@@ -23,6 +23,7 @@ from .arm import DynamicArm
 from .codegen import PLANT_STEP_SOURCES, CompiledLibrary, Progress, build_library
 from .dynamics.singular import singular_dynamics_error
 from .errors import NumericalError
+from .drive_train import drive_layout
 from .plant import STEP_FUNCTIONS, build_plant
 
 __all__ = ["CompiledPlant", "PlantRun", "compiled_plant", "plant_entry_points", "PLANT_STATUS"]
@@ -63,7 +64,8 @@ class CompiledPlant:
         motor_model = robot.dynamics.motor_model
         self.description = desc  # not the robot: the cache below is keyed by its dynamics, weakly
         self.n = robot.n
-        self.nx, self.nz = 2 * self.n, self.n
+        lay = drive_layout(desc)  # 2n states and n modes for a rigid arm
+        self.nx, self.nz = lay.nx, lay.nz
         key = f"plant|{desc.digest()}|{motor_model}|{','.join(STEP_FUNCTIONS)}|{source_fingerprint()}"
         self.library, self.build_info = build_library(
             f"{desc.identifier}-{motor_model}-plant", key, lambda: build_plant(robot).step_functions(_PREFIX),
@@ -102,10 +104,10 @@ class PlantRun:
         self.compiled = compiled
         n = compiled.n
         self.p = np.ascontiguousarray(p, dtype=np.float64).copy()
-        self.x = np.zeros(2 * n)
-        self.m = np.zeros(n)
+        self.x = np.zeros(compiled.nx)
+        self.m = np.zeros(compiled.nz)
         self.u = np.zeros(n)
-        handle = compiled._open(compiled.nx, compiled.nz, n, ctypes.cast(compiled._functions, _P))
+        handle = compiled._open(compiled.nx, compiled.nz, compiled.nz, ctypes.cast(compiled._functions, _P))
         if not handle:
             raise MemoryError("mw_plant_open: out of memory or a work-size query failed")
         self._handle = handle

@@ -51,6 +51,7 @@ __all__ = [
     "InertiaConsistencyWarning",
     "description_from_dict",
     "BUILTIN_DIR",
+    "DRIVE_TRAIN_DEFAULTS",
     "BUILTIN_ROBOTS",
     "JOINT_TYPES",
     "TORQUE_LIMIT_FROM_FILE",
@@ -138,6 +139,30 @@ class LinkDescription:
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
     # Where viscous_friction and coulomb_friction come from: FROM_FILE, FROM_URDF or FROM_DEFAULT each.
     friction_source: tuple[str, str] = field(default=(FROM_DEFAULT, FROM_DEFAULT), compare=False)
+    # The drive train (docs/robot-file.md, "Drive-train keys"; the plant: model/drive_train.py). An elastic gear
+    # (gear_stiffness not None) is a spring-damper on the motor side between the rotor (angle q_m) and G q;
+    # friction_side says where the friction acts on an elastic joint ("motor": on the rotor, with the motor-side
+    # coefficients; "link": on the joint, reflected as |G| Tc and G^2 B); friction_peak is the break-away torque
+    # over the sliding Coulomb torque (>= 1); a current loop (current_bandwidth not None) makes the motor torque
+    # follow its demand by a second-order law, with back-EMF when armature_resistance is stated.
+    gear_stiffness: float | None = None
+    gear_damping: float = 0.0
+    friction_side: str = "motor"
+    friction_peak: float = 1.0
+    torque_constant: float | None = None
+    current_bandwidth: float | None = None
+    current_damping: float = 1.0
+    armature_resistance: float | None = None
+
+    @property
+    def is_elastic(self) -> bool:
+        """Whether the gear is elastic (a spring-damper between rotor and gear, motor side)."""
+        return self.gear_stiffness is not None
+
+    @property
+    def has_current_loop(self) -> bool:
+        """Whether the motor torque follows its demand through a second-order current loop."""
+        return self.current_bandwidth is not None
 
     @property
     def is_revolute(self) -> bool:
@@ -250,7 +275,8 @@ class RobotDescription:
             "convention": self.convention, "base": self.base, "tool": self.tool, "tip": self.tip,
             "gravity": self.gravity,
             "links": [
-                {k: v for k, v in dataclasses.asdict(lk).items() if k not in _NOT_PHYSICS}
+                {k: v for k, v in dataclasses.asdict(lk).items()
+                 if k not in _NOT_PHYSICS and not (k in DRIVE_TRAIN_DEFAULTS and v == DRIVE_TRAIN_DEFAULTS[k])}
                 for lk in self.links
             ],
         }
@@ -258,6 +284,12 @@ class RobotDescription:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
+#: The drive-train fields and their defaults (a rigid gear without current loop): at these values a link's
+#: digest is the one it had before drive trains existed, so a rigid robot's compiled code is unchanged.
+DRIVE_TRAIN_DEFAULTS: dict[str, Any] = {
+    "gear_stiffness": None, "gear_damping": 0.0, "friction_side": "motor", "friction_peak": 1.0,
+    "torque_constant": None, "current_bandwidth": None, "current_damping": 1.0, "armature_resistance": None,
+}
 #: Link fields that do not enter the equations of motion (so not the cache key of generated code): names and limits.
 _NOT_PHYSICS = frozenset({"name", "qlim", "torque_limit", "velocity_limit", "acceleration_limit", "friction_source"})
 
@@ -325,16 +357,19 @@ def tr2rpy(R: npt.ArrayLike) -> np.ndarray:
 # --------------------------------------------------------------------------- parsing
 
 _TOP_REQUIRED = ("name", "links")
-_TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks", "convention", "base", "tool")
+_TOP_OPTIONAL = ("gravity", "rest", "description", "source", "units", "tasks", "convention", "base", "tool", "cascade")
 _LINK_REQUIRED = ("joint", "a", "alpha", "d", "theta")
 _LINK_OPTIONAL = (
     "mass", "com", "inertia", "motor_inertia", "gear_ratio", "viscous_friction",
     "coulomb_friction", "qlim", "name", "rotor_mass", "torque_limit", "source", "flip", "inertia_note",
-    "velocity_limit", "acceleration_limit",
+    "velocity_limit", "acceleration_limit", *DRIVE_TRAIN_DEFAULTS,
 )
 _POSE_KEYS = ("xyz", "rpy")
 _TASK_REQUIRED = ("name", "waypoints")
-_TASK_OPTIONAL = ("segment_time", "labels", "description")
+_TASK_OPTIONAL = ("segment_time", "labels", "description", "kind", "hold_time")
+#: Task kinds: through the waypoints, segment by segment; or the synchronised trapezoidal point-to-point motion.
+TASK_KINDS = ("waypoints", "ptp")
+_CASCADE_KEYS = ("kp", "ks", "ti", "rate")
 
 
 class _Where:
@@ -501,6 +536,7 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
                 if value <= 0:
                     raise w.fail(i, key, data[key], what)
                 kw[key] = value
+    _drive_train(w, i, data, kw)
     kw["friction_source"] = tuple(FROM_FILE if key in data else FROM_DEFAULT
                                   for key in ("viscous_friction", "coulomb_friction"))
     if "flip" in data:
@@ -509,6 +545,45 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
                 raise w.fail(i, "flip", data["flip"], "true or false")
             kw["flip"] = data["flip"]
     return None if len(w.problems) > start else LinkDescription(**kw)
+
+
+def _drive_train(w: _Where, i: int, data: Mapping[str, Any], kw: dict[str, Any]) -> None:
+    """The drive-train keys of link ``i`` into ``kw`` (each bad one recorded in ``w``)."""
+    for key, what in (("gear_stiffness", "a gear stiffness > 0 (N m/rad, motor side)"),
+                      ("torque_constant", "a torque constant > 0 (N m/A)"),
+                      ("current_bandwidth", "a current-loop bandwidth > 0 (rad/s)"),
+                      ("current_damping", "a current-loop damping ratio > 0"),
+                      ("armature_resistance", "an armature resistance > 0 (Ohm)")):
+        if key in data:
+            with w.collect():
+                value = _number(w, i, key, data[key])
+                if value <= 0:
+                    raise w.fail(i, key, data[key], what)
+                kw[key] = value
+    if "gear_damping" in data:
+        with w.collect():
+            kw["gear_damping"] = _number(w, i, "gear_damping", data["gear_damping"], nonneg=True)
+    if "friction_peak" in data:
+        with w.collect():
+            peak = _number(w, i, "friction_peak", data["friction_peak"])
+            if peak < 1:
+                raise w.fail(i, "friction_peak", data["friction_peak"], "a break-away factor >= 1")
+            kw["friction_peak"] = peak
+    if "friction_side" in data:
+        with w.collect():
+            if data["friction_side"] not in ("motor", "link"):
+                raise w.fail(i, "friction_side", data["friction_side"], "'motor' or 'link'")
+            kw["friction_side"] = data["friction_side"]
+    for key, needs in (("gear_damping", "gear_stiffness"), ("friction_side", "gear_stiffness"),
+                       ("current_damping", "current_bandwidth"), ("armature_resistance", "current_bandwidth"),
+                       ("armature_resistance", "torque_constant")):
+        if key in data and needs not in data:
+            with w.collect():
+                raise w.fail(i, key, data[key], f"to be stated with '{needs}' (it means nothing without it)")
+    if "gear_stiffness" in data and kw.get("motor_inertia", 0.0) <= 0:
+        with w.collect():
+            raise w.fail(i, "motor_inertia", data.get("motor_inertia", 0.0),
+                         "a rotor inertia > 0 for an elastic gear (the rotor is a body of its own)")
 
 
 def _pose(w: _Where, key: str, value: Any) -> tuple[float, ...] | None:
@@ -595,6 +670,40 @@ def _task(w: _Where, k: int, data: Any, qlims: Sequence[tuple[float, float] | No
         if not isinstance(description, str):
             raise w.fail(None, f"{where}.description", description, "a string")
         out["description"] = description
+    with w.collect():
+        kind = data.get("kind", "waypoints")
+        if kind not in TASK_KINDS:
+            raise w.fail(None, f"{where}.kind", kind, f"one of {', '.join(repr(k) for k in TASK_KINDS)}")
+        if kind == "ptp" and isinstance(rows, list) and len(rows) != 2:
+            raise w.fail(None, f"{where}.waypoints", rows, "2 joint vectors (begin, end) for a 'ptp' task")
+        out["kind"] = kind
+    with w.collect():
+        out["hold_time"] = _number(w, None, f"{where}.hold_time", data.get("hold_time", 0.0), nonneg=True)
+    return types.MappingProxyType(out)
+
+
+def _cascade(w: _Where, data: Any, n: int) -> Mapping[str, Any]:
+    """The ``[cascade]`` table: P-PI cascade gains, each one number or n numbers, and the rate."""
+    if not isinstance(data, Mapping):
+        raise w.fail(None, "cascade", data, "a table of kp, ks, ti, rate")
+    _check_keys(w, None, data, (), _CASCADE_KEYS, prefix="cascade.")
+    out: dict[str, Any] = {}
+    for key, what in (("kp", "position gains > 0 (1/s)"), ("ks", "speed gains > 0 (A s/rad, or N m s/rad)"),
+                      ("ti", "PI time constants > 0 (s)")):
+        if key in data:
+            with w.collect():
+                raw = data[key]
+                values = _vector(w, None, f"cascade.{key}", raw, n) if isinstance(raw, list) else \
+                    (_number(w, None, f"cascade.{key}", raw),) * n
+                if min(values) <= 0:
+                    raise w.fail(None, f"cascade.{key}", raw, what)
+                out[key] = values
+    if "rate" in data:
+        with w.collect():
+            rate = _number(w, None, "cascade.rate", data["rate"])
+            if rate <= 0:
+                raise w.fail(None, "cascade.rate", data["rate"], "a control rate > 0 (Hz)")
+            out["rate"] = rate
     return types.MappingProxyType(out)
 
 
@@ -659,6 +768,9 @@ def _description(w: _Where, data: Any, path: str) -> RobotDescription | None:
                 with w.collect():
                     tasks.append(_task(w, k, t, _qlims(links), names))
             extra["tasks"] = tuple(tasks)
+    if "cascade" in data and links:
+        with w.collect():
+            extra["cascade"] = _cascade(w, data["cascade"], len(links))
     if len(w.problems) > start:
         return None
     return RobotDescription(

@@ -37,16 +37,20 @@ and ``update`` to the importer's solver. Outputs ``y``, in this order::
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from .arm import DynamicArm
+from .description import DRIVE_TRAIN_DEFAULTS
 from .dynamics.motors import coulomb_limits_sx
 from .dynamics.parameters import split_parameters
 from .dynamics.stick_slip import sliding_accel_sx, sliding_indicators_sx, stick_slip_sx
 from .dynamics.symbolic import plant_terms_sx
+from .drive_train import (check_drive_trains, drive_layout, drive_terms_sx, equilibrium_state, has_drive_trains,
+                          rigid_arm_description)
 
 __all__ = ["Plant", "STEP_FUNCTIONS", "LINK_MASS_SCALE", "build_plant", "rpy_zyx_sx"]
 
@@ -144,6 +148,8 @@ def build_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> Plant:
     and inertia (centres of mass, rotors and payload unchanged), so that one compiled plant serves a
     sweep over link masses (:func:`model.dynamics.symbolic.plant_terms_sx`).
     """
+    if has_drive_trains(robot.description):
+        return _build_drive_plant(robot, link_mass_scale=link_mass_scale)
     n = robot.n
     desc = robot.description
     dyn = robot.dynamics
@@ -220,3 +226,80 @@ def build_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> Plant:
         x0=np.concatenate([desc.q_rest, np.zeros(n)]),
         link_mass_scale=link_mass_scale,
     )
+
+
+def _build_drive_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> Plant:
+    """:func:`build_plant` for a robot with drive trains (:mod:`model.drive_train`): more states and modes."""
+    desc = robot.description
+    dyn = robot.dynamics
+    check_drive_trains(desc, dyn.motor_model)
+    lay = drive_layout(desc)
+    n, nx, nz = desc.n, lay.nx, lay.nz
+    layout = dyn.layout
+    G = np.asarray(robot.gear_ratio, dtype=float)
+    x = ca.SX.sym("x", nx)
+    u = ca.SX.sym("u", n)
+    p = ca.SX.sym("p", layout.size + (1 if link_mass_scale else 0))
+    m = ca.SX.sym("m", nz)
+    q, qd = x[:n], x[n:2 * n]
+    params = split_parameters(layout, p)
+    scale = p[layout.size] if link_mass_scale else None
+    rotor_side = [lk.is_elastic and lk.friction_side == "motor" for lk in desc.links]
+    arm_viscous = ca.vertcat(*[0 if rotor_side[i] else params.viscous_friction[i] for i in range(n)])
+    B_arm, h_arm = plant_terms_sx(rigid_arm_description(desc), dyn.motor_model, q, qd,
+                                  params._replace(viscous_friction=arm_viscous), scale)
+    t = drive_terms_sx(desc, lay, x, u, B_arm, h_arm, params.viscous_friction, params.coulomb_friction_pos,
+                       params.coulomb_friction_neg)
+    law = stick_slip_sx(t["B"], t["r"], t["tc_pos"], t["tc_neg"], t["qd"], m, t["hold_pos"], t["hold_neg"])
+    ne = lay.ne
+
+    def arrange(vel: ca.SX, acc: ca.SX) -> ca.SX:
+        return ca.vertcat(vel[:n], acc[:n], vel[n:], acc[n:], t["extra"])
+
+    xdot = arrange(law.qd_held, law.qdd)
+    xdot_sliding = arrange(t["qd"], sliding_accel_sx(t["B"], t["r"], t["tc_pos"], t["tc_neg"], m))
+    x_next = ca.vertcat(q, law.qd_next[:n], x[lay.qm_slice], law.qd_next[n:], x[2 * n + 2 * ne:])
+    qm = ca.vertcat(*[G[i] * q[i] for i in range(n)])
+    for k, i in enumerate(lay.elastic):
+        qm[i] = x[lay.qm_slice][k]
+    T_WE = robot.kinematics.fkine(q)
+    y = ca.vertcat(q, qd, qm, T_WE[0:3, 3], rpy_zyx_sx(T_WE[0:3, 0:3]))
+    rigid = build_plant_rigid_names(robot, link_mass_scale)
+
+    def fn(name: str, outputs: list[ca.SX], out_names: list[str], inputs: tuple = (x, u, p, m),
+           in_names: tuple = _ARGS) -> ca.Function:
+        return ca.Function(name, list(inputs), [ca.densify(ca.cse(o)) for o in outputs], list(in_names), out_names)
+
+    g = np.asarray(robot.gravload(desc.q_rest), dtype=float)
+    defaults = np.array(robot.parameters.vector, dtype=float)
+    return dataclasses.replace(
+        rigid,
+        robot=robot,
+        param_defaults=np.append(defaults, 1.0) if link_mass_scale else defaults,
+        nx=nx, nz=nz,
+        ode=fn("ode", [xdot], ["xdot"]),
+        ode_sliding=fn("ode_sliding", [xdot_sliding], ["xdot"]),
+        out=fn("out", [y], ["y"], (x, u, p), _ARGS[:3]),
+        events=fn("events", [law.z], ["z"]),
+        events_sliding=fn("events_sliding", [sliding_indicators_sx(t["tc_pos"], t["tc_neg"], t["qd"], m)], ["z"]),
+        update=fn("update", [law.m_next, x_next], ["m_next", "x_next"]),
+        start=fn("start", [law.m_start], ["m_start"]),
+        active=fn("active", [law.active], ["active"]),
+        pivots=fn("pivots", [law.pivots], ["D"]),
+        friction=fn("friction", [law.friction], ["f"]),
+        state_names=tuple(lay.state_names()),
+        x0=equilibrium_state(desc, desc.q_rest, g),
+    )
+
+
+def build_plant_rigid_names(robot: DynamicArm, link_mass_scale: bool) -> Plant:
+    """A :class:`Plant` holding the names, units and parameters of ``robot`` (its Functions those of the rigid
+    arm: :func:`_build_drive_plant` replaces them)."""
+    import dataclasses as _dc
+
+    desc = robot.description
+    bare = _dc.replace(desc, links=tuple(_dc.replace(lk, **{k: v for k, v in DRIVE_TRAIN_DEFAULTS.items()})
+                                         for lk in desc.links))
+    from .robot import Robot
+
+    return build_plant(Robot(bare, motor_model=robot.dynamics.motor_model), link_mass_scale=link_mass_scale)

@@ -39,7 +39,7 @@ from .description import InertiaConsistencyWarning, RobotDescription
 from .errors import InputError, did_you_mean
 from .limits import MAX_WAYPOINTS, check_file, load_toml, read_bounded
 from .loading import load_description
-from .trajectory import Trajectory, via_points
+from .trajectory import Trajectory, ptp_synchronised, via_points
 
 __all__ = [
     "Task",
@@ -89,6 +89,10 @@ class Task:
     labels: tuple[str, ...]
     segment_time: float
     description: str = ""
+    kind: str = "waypoints"
+    hold_time: float = 0.0
+    velocity_limits: tuple[float, ...] | None = None
+    acceleration_limits: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         w = np.array(self.waypoints, dtype=float)
@@ -118,8 +122,24 @@ class Task:
         t0
             Start time, s.
         """
+        if self.kind == "ptp":
+            return self._ptp(dt, t0)
         times = self.segment_time if segment_time is None else segment_time
         return via_points(self.waypoints, times, dt, t0=t0, profile=profile)
+
+
+    def _ptp(self, dt: float, t0: float) -> Trajectory:
+        """The synchronised point-to-point motion (``kind = "ptp"``) within the joints' limits, then the hold."""
+        if self.velocity_limits is None or self.acceleration_limits is None:
+            raise InputError(f"task {self.name!r}: a 'ptp' task needs every joint's velocity_limit and "
+                             f"acceleration_limit in the robot file", parameter="velocity_limit")
+        return ptp_synchronised(self.waypoints[0], self.waypoints[-1], self.velocity_limits,
+                                self.acceleration_limits, dt, t0=t0, hold=self.hold_time)
+
+
+def _limits(desc: RobotDescription, key: str) -> tuple[float, ...] | None:
+    values = [getattr(lk, key) for lk in desc.links]
+    return None if any(v is None for v in values) else tuple(float(v) for v in values)
 
 
 def _description(robot: str | Path | RobotDescription) -> RobotDescription:
@@ -131,7 +151,10 @@ def robot_tasks(robot: str | Path | RobotDescription) -> dict[str, Task]:
     desc = _description(robot)
     return {
         t["name"]: Task(name=t["name"], robot=desc.name, waypoints=np.array(t["waypoints"], dtype=float),
-                        labels=tuple(t["labels"]), segment_time=float(t["segment_time"]), description=t["description"])
+                        labels=tuple(t["labels"]), segment_time=float(t["segment_time"]), description=t["description"],
+                        kind=t.get("kind", "waypoints"), hold_time=float(t.get("hold_time", 0.0)),
+                        velocity_limits=_limits(desc, "velocity_limit"),
+                        acceleration_limits=_limits(desc, "acceleration_limit"))
         for t in desc.tasks
     }
 

@@ -51,6 +51,7 @@ __all__ = [
     "via_points",
     "ctraj",
     "straight_line",
+    "ptp_synchronised",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -883,3 +884,74 @@ def ctraj(T0: npt.ArrayLike, T1: npt.ArrayLike, T: float, dt: float | None = Non
     times, step = _sample_times(path.line.T, dt, t, path.line.t0)
     poses, v, w, vd, wd = path.batch(times)
     return CartesianTrajectory(t=times, poses=poses, v=v, w=w, vd=vd, wd=wd, path=path, dt=step)
+
+
+def ptp_synchronised(q0: npt.ArrayLike, qf: npt.ArrayLike, qd_max: npt.ArrayLike, qdd_max: npt.ArrayLike,
+                     dt: float | None = None, *, t0: float = 0.0, hold: float = 0.0) -> Trajectory:
+    """The synchronised time-optimal point-to-point motion (Modelica's ``KinematicPTP2``), then ``hold`` s at rest.
+
+    One path parameter ``s`` in [0, 1] for every joint, ``q = q0 + (qf - q0) s``, with the trapezoidal
+    time law of the slowest joint: ``sd_max = 1 / max_j(|dq_j| / qd_max_j)``,
+    ``sdd_max = 1 / max_j(|dq_j| / qdd_max_j)``; accelerate for ``Ta2 = sd_max / sdd_max``, cruise until
+    ``Tv = 1 / sd_max``, brake until ``Te = Tv + Ta2``; without room for a cruise (``Ta2 >= sqrt(1 / sdd_max)``)
+    ``Tv = sqrt(1 / sdd_max)``, ``Te = 2 Tv``. Joints that do not move (``dq = 0``) do not limit it.
+
+    Parameters
+    ----------
+    q0, qf
+        (n,) start and end positions, rad or m.
+    qd_max, qdd_max
+        (n,) joint speed (rad/s or m/s) and acceleration limits (/s^2), > 0 each.
+    dt, t0
+        Sampling period and start time, s.
+    hold
+        Time at rest at ``qf`` after the motion, s (>= 0); with ``dt`` lengthened to end on the grid.
+    """
+    a = _vector(q0, "q0")
+    b = _vector(qf, "qf", a.size)
+    vmax = _vector(qd_max, "qd_max", a.size)
+    amax = _vector(qdd_max, "qdd_max", a.size)
+    for name, lim in (("qd_max", vmax), ("qdd_max", amax)):
+        if np.any(lim <= 0):
+            raise InputError(f"expected limits > 0, got {lim.tolist()}", parameter=name)
+    hold = _scalar(hold, "hold")
+    if hold < 0:
+        raise InputError(f"expected a time >= 0 (s), got {hold}", parameter="hold")
+    delta = b - a
+    if not np.any(delta != 0):
+        raise InputError("expected a motion: the start and end positions are equal", parameter="qf")
+    sd_max = 1.0 / float(np.max(np.abs(delta) / vmax))
+    sdd_max = 1.0 / float(np.max(np.abs(delta) / amax))
+    ta1 = math.sqrt(1.0 / sdd_max)
+    ta2 = sd_max / sdd_max
+    zero = np.zeros_like(a)
+    if ta2 >= ta1:  # no cruise: accelerate to half way, brake
+        tv, te = ta1, 2.0 * ta1
+        offsets = [0.0, tv, te]
+        s = [0.0, 0.5, 1.0]
+        sd = [0.0, sdd_max * ta1, 0.0]
+        acc0, acc1 = [sdd_max, -sdd_max], [sdd_max, -sdd_max]
+    else:
+        tv, te = 1.0 / sd_max, 1.0 / sd_max + ta2
+        s1 = 0.5 * sdd_max * ta2 * ta2
+        offsets = [0.0, ta2, tv, te]
+        s = [0.0, s1, s1 + sd_max * (tv - ta2), 1.0]
+        sd = [0.0, sd_max, sd_max, 0.0]
+        acc0, acc1 = [sdd_max, 0.0, -sdd_max], [sdd_max, 0.0, -sdd_max]
+    q = [b if v == 1.0 else a + delta * v for v in s]  # the end exactly
+    qd = [delta * v for v in sd]
+    qdd0 = [delta * v for v in acc0]
+    qdd1 = [delta * v for v in acc1]
+    if dt is not None:  # the hold ends on the sampling grid (at least ``hold`` s after Te)
+        dt = _scalar(dt, "dt", positive=True)
+        hold = math.ceil((te + hold) / dt - 1e-9) * dt - te
+    if hold > 1e-12:
+        offsets.append(te + hold)
+        q.append(b)
+        qd.append(zero)
+        qdd0.append(zero)
+        qdd1.append(zero)
+    path = JointPath(t0 + np.array(offsets), q, qd, qdd0, qdd1)
+    T = offsets[-1]
+    times, step = _sample_times(T, dt, None, t0)
+    return _sampled(path, times, step, np.array([t0, t0 + te]), np.vstack([a, b]), "ptp")

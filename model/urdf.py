@@ -30,7 +30,7 @@ from xml.etree.ElementTree import ParseError
 
 import numpy as np
 
-from .description import (FROM_DEFAULT, FROM_FILE, FROM_URDF, RobotDescription, RobotDescriptionError, _check_keys,
+from .description import (DRIVE_TRAIN_DEFAULTS, FROM_DEFAULT, FROM_FILE, FROM_URDF, RobotDescription, RobotDescriptionError, _check_keys,
                           _description, _link, _Where)
 from .limits import MAX_FILE_BYTES as MAX_URDF_BYTES
 from .limits import MAX_JOINTS as MAX_MOVING_JOINTS
@@ -52,7 +52,7 @@ __all__ = [
 
 #: The keys a ``[joints.NAME]`` table may hold: the motor keys of a ``[[links]]`` table, and its source.
 MOTOR_KEYS = ("motor_inertia", "gear_ratio", "viscous_friction", "coulomb_friction", "torque_limit", "rotor_mass", "source",
-              "velocity_limit", "acceleration_limit")
+              "velocity_limit", "acceleration_limit", "inertia_note", *DRIVE_TRAIN_DEFAULTS)
 #: A ``<limit velocity>`` at or above this is "no limit": the value :mod:`model.urdf_export` writes for a joint whose
 #: description states none (URDF requires the attribute and a finite number).
 NO_LIMIT = sys.float_info.max
@@ -62,8 +62,8 @@ _REFUSED = {
     "planar": "a planar joint (3 degrees of freedom) is not a serial-arm joint",
 }
 _TOML_KEYS = ("name", "urdf", "base_link", "tip_link", "joints", "gravity", "rest", "description", "source",
-              "units", "tasks", "base", "tool")
-_PASSED_ON = ("name", "gravity", "rest", "description", "source", "units", "tasks", "base", "tool")
+              "units", "tasks", "base", "tool", "cascade")
+_PASSED_ON = ("name", "gravity", "rest", "description", "source", "units", "tasks", "base", "tool", "cascade")
 
 
 @dataclass(frozen=True)

@@ -115,7 +115,8 @@ def _coulomb(tc_pos: ca.SX, tc_neg: ca.SX, m: ca.SX) -> list[ca.SX]:
     return [ca.if_else(m[i] > 0, tc_pos[i], ca.if_else(m[i] < 0, tc_neg[i], 0)) for i in range(m.numel())]
 
 
-def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m: ca.SX) -> ModeLaw:
+def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m: ca.SX,
+                  hold_pos: ca.SX | None = None, hold_neg: ca.SX | None = None) -> ModeLaw:
     """The stick-slip law (module docstring) from its symbolic pieces.
 
     Parameters
@@ -128,8 +129,13 @@ def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m
         (n, 1) joint-side Coulomb torques ``Tc+ >= 0`` and ``Tc- <= 0``.
     qd, m
         (n, 1) joint velocities and friction modes.
+    hold_pos, hold_neg
+        (n, 1) the break-away limits of a stuck joint (``peak Tc+`` and ``peak Tc-``, peak >= 1); default
+        ``tc_pos``, ``tc_neg`` (the same expressions: the law is then the one without a peak, bit for bit).
     """
     n = m.numel()
+    hp = tc_pos if hold_pos is None else hold_pos
+    hn = tc_neg if hold_neg is None else hold_neg
     stuck = [m[i] == 0 for i in range(n)]
     f_c = _coulomb(tc_pos, tc_neg, m)
     M = ca.SX(n, n)
@@ -149,7 +155,7 @@ def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m
     z = []
     for i in range(n):
         sliding = m[i] * qd[i] + V_EPS
-        hold = ca.fmin(tc_pos[i] - f[i], f[i] - tc_neg[i]) + F_EPS * (tc_pos[i] - tc_neg[i])
+        hold = ca.fmin(hp[i] - f[i], f[i] - hn[i]) + F_EPS * (hp[i] - hn[i])
         z.append(ca.if_else(has_c[i], ca.if_else(stuck[i], hold, sliding), 1))
 
     a_tol = A_EPS * (1 + ca.mmax(ca.fabs(qdd)))
@@ -157,7 +163,7 @@ def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m
                                                                           m[i] * qdd[i] < -a_tol)))
              for i in range(n)]
     any_stick = _any(stick)
-    excess = [ca.if_else(stuck[i], ca.fmax(f[i] - tc_pos[i], tc_neg[i] - f[i]), -1e300) for i in range(n)]
+    excess = [ca.if_else(stuck[i], ca.fmax(f[i] - hp[i], hn[i] - f[i]), -1e300) for i in range(n)]
     m_next, qd_next = [], []
     for i in range(n):
         largest = excess[i] > 0
@@ -166,7 +172,7 @@ def stick_slip_sx(B: ca.SX, r: ca.SX, tc_pos: ca.SX, tc_neg: ca.SX, qd: ca.SX, m
                 largest = ca.logic_and(largest, excess[i] > excess[j])
             elif j > i:
                 largest = ca.logic_and(largest, excess[i] >= excess[j])
-        release = ca.if_else(f[i] > tc_pos[i], 1, -1)
+        release = ca.if_else(f[i] > hp[i], 1, -1)
         mi = ca.if_else(any_stick, ca.if_else(stick[i], 0, m[i]), ca.if_else(largest, release, m[i]))
         m_next.append(mi)
         qd_next.append(ca.if_else(mi == 0, 0, qd[i]))
