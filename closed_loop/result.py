@@ -92,6 +92,8 @@ class TrackingResult:
         (n,) torque limits of the controller, N m, or None.
     rate_hz, substeps, wall_time
         Control rate (Hz), RK4 sub-steps per period, wall time (s).
+    rotor_qd
+        (N+1, n) rotor speeds, rad/s, where a joint has an elastic gear (its own state); None: ``G qd``.
     """
 
     controller: str
@@ -110,6 +112,7 @@ class TrackingResult:
     rate_hz: float
     substeps: int
     wall_time: float
+    rotor_qd: np.ndarray | None = None
 
     @property
     def error(self) -> np.ndarray:
@@ -118,8 +121,8 @@ class TrackingResult:
 
     @property
     def qd_m(self) -> np.ndarray:
-        """(N+1, n) motor velocity ``G qd``, rad/s."""
-        return self.qd * self.G
+        """(N+1, n) motor velocity, rad/s: ``G qd``, or the rotor's own speed behind an elastic gear."""
+        return self.qd * self.G if self.rotor_qd is None else self.rotor_qd
 
     def metrics(self) -> TrackingMetrics:
         """RMS / max error, peak motor torque and velocity, saturation per joint."""

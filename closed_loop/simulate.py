@@ -12,6 +12,7 @@ initialisation: the start modes settled with zero torque.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any, Callable
 
@@ -21,7 +22,7 @@ from control_design.controllers import Controller
 from control_design.errors import DesignSpecError, SimulationDivergedError
 from control_design.reference import Reference
 from model.compiled_plant import compiled_plant
-from model.drive_train import drive_layout, equilibrium_state
+from model.drive_train import drive_layout, drive_substeps, equilibrium_state
 from model.robot import Robot
 from model.trajectory import Trajectory
 
@@ -72,6 +73,8 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
     if controller.n != n or trajectory.n != n:
         raise DesignSpecError(f"controller/trajectory: expected {n} joints like plant {plant.name!r}, "
                               f"got {controller.n} and {trajectory.n}")
+    if substeps is None:
+        substeps = drive_substeps(plant.description, controller.dt)
     sched = Schedule.build(plant, trajectory, controller.dt, rate_hz=controller.rate_hz, t_final=t_final, q0=q0,
                            qd0=qd0, substeps=substeps)
     steps, t, substeps = sched.steps, sched.t, sched.substeps
@@ -88,6 +91,7 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
     Q = np.empty((steps + 1, n))
     QD = np.empty((steps + 1, n))
     TAU = np.empty((steps + 1, n))
+    QDM = np.empty((steps + 1, n)) if lay.ne else None
     controller.reset()
     motor = getattr(controller, "measures_motor", False)
     if motor:  # a motor-side controller starts holding the arm where it is
@@ -98,6 +102,8 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
         for k in range(steps + 1):
             Q[k], QD[k] = x[:n], x[n:2 * n]
             ref = Reference(Qr[k], QDr[k], QDDr[k])
+            if QDM is not None:
+                QDM[k] = lay.motor_state(x, G)[1]
             if motor:
                 qm, qdm = lay.motor_state(x, G)
                 tau_m = controller.update_motor(float(t[k]), Q[k].copy(), QD[k].copy(), qm, qdm, ref)
@@ -114,4 +120,5 @@ def simulate_tracking(plant: Robot, controller: Controller, trajectory: Trajecto
     finally:
         run.close()
     wall = time.perf_counter() - start
-    return sched.result(plant, controller.kind, Q, QD, TAU, controller.tau_m_max, wall)
+    result = sched.result(plant, controller.kind, Q, QD, TAU, controller.tau_m_max, wall)
+    return result if QDM is None else dataclasses.replace(result, rotor_qd=QDM)

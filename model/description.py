@@ -66,7 +66,8 @@ __all__ = [
 ]
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "robots"
-BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560", "panda", "ur5")
+BUILTIN_ROBOTS: tuple[str, ...] = ("scara", "planar2r", "planar3r", "arm4", "spherical", "puma560", "panda", "ur5",
+                                   "manutec_r3")
 #: Where a motor's torque limit comes from: its ``torque_limit`` in the robot file, or the design's
 #: default rule (``control_design.joint_model.TORQUE_LIMIT_RULE``) when the file states none.
 TORQUE_LIMIT_FROM_FILE = "robot file"

@@ -35,6 +35,7 @@ rule (``plant_step.c``) and Model Exchange.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,7 +45,12 @@ import numpy as np
 from .description import RobotDescription
 from .errors import InputError
 
-__all__ = ["DriveLayout", "drive_layout", "has_drive_trains", "rigid_arm_description", "equilibrium_state"]
+__all__ = ["DriveLayout", "drive_layout", "drive_substeps", "has_drive_trains", "rigid_arm_description",
+           "equilibrium_state"]
+
+#: Largest RK4 step times the fastest drive-train rate (current loop or rotor on its gear spring): 0.25 keeps the
+#: step well inside RK4's stability bound (2.78) and its error per step small (~(h w)^5 / 120).
+DRIVE_STEP_FACTOR = 0.25
 
 
 def has_drive_trains(desc: RobotDescription) -> bool:
@@ -222,3 +228,20 @@ def equilibrium_state(desc: RobotDescription, q: np.ndarray, g: np.ndarray) -> n
         x[lay.tau_slice.start + k] = tau[i]
         x[lay.xi_slice.start + k] = -2.0 * lk.current_damping * tau[i] / lk.current_bandwidth
     return x
+
+
+def drive_substeps(desc: RobotDescription, dt: float) -> int | None:
+    """RK4 sub-steps per control period ``dt`` (s) for the drive trains' fastest rate; None without drive trains.
+
+    The rate: a current loop's bandwidth ``w``, an elastic gear's rotor frequency ``sqrt(c / Jm)`` and its damper's
+    ``d / Jm`` (1/s); sub-steps ``ceil(dt max_rate / DRIVE_STEP_FACTOR)``, at least 1.
+    """
+    rates = []
+    for lk in desc.links:
+        if lk.has_current_loop:
+            rates.append(lk.current_bandwidth)
+        if lk.is_elastic:
+            rates += [math.sqrt(lk.gear_stiffness / lk.motor_inertia), lk.gear_damping / lk.motor_inertia]
+    if not rates:
+        return None
+    return max(1, math.ceil(dt * max(rates) / DRIVE_STEP_FACTOR - 1e-9))

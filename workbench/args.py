@@ -63,13 +63,15 @@ class OneLineParser(argparse.ArgumentParser):
         raise ArgumentsError(message, self.prog)
 
 
-def controller_kind(value: str) -> str:
-    """``value`` if it names a controller kind, else :class:`~control_design.errors.UnknownControllerError`."""
+def controller_kind(value: str, extra: tuple[str, ...] = ()) -> str:
+    """``value`` if it names a controller kind (or one of the command's ``extra`` kinds), else
+    :class:`~control_design.errors.UnknownControllerError`."""
     from control_design.design import CONTROLLER_KINDS
     from control_design.errors import UnknownControllerError
 
-    if value not in CONTROLLER_KINDS:
-        raise UnknownControllerError(f"--controller: expected one of {', '.join(CONTROLLER_KINDS)}, got {value!r}")
+    kinds = CONTROLLER_KINDS + tuple(extra)
+    if value not in kinds:
+        raise UnknownControllerError(f"--controller: expected one of {', '.join(kinds)}, got {value!r}")
     return value
 
 

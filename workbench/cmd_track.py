@@ -3,8 +3,10 @@
 ``manip track ROBOT --controller KIND [--task pick-and-place | --waypoints FILE | --trajectory FILE.csv]
 [--segment-time S] [--rate HZ] [--payload KG] --out DIR`` simulates the closed loop on the nonlinear model and
 writes ``DIR/metrics.json`` and ``DIR/tracking_error.png``, ``DIR/torques.png``,
-``DIR/joints.png``, and ``DIR/tracking.npz`` (t, q, q_ref: the run that
-``manip teach ROBOT --result DIR`` plays); progress goes to stderr. With a plant/model mismatch
+``DIR/joints.png``, ``DIR/tracking.csv`` (:func:`write_tracking_csv`) and ``DIR/tracking.npz`` (t, q, q_ref:
+the run that ``manip teach ROBOT --result DIR`` plays); progress goes to stderr. ``--controller cascade`` is the
+motor-side P-PI cascade of the robot file's ``[cascade]`` table (:mod:`control_design.cascade`), at its ``rate``
+unless ``--rate`` is given. With a plant/model mismatch
 (``--payload``, ``--friction-scale``, ``--mass-scale``) the same controller also
 runs on the exact plant and ``metrics.json`` reports both and their ratio.
 ``--out`` is checked before the simulation starts.
@@ -15,6 +17,8 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+
+import numpy as np
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
@@ -27,7 +31,24 @@ if TYPE_CHECKING:
     from closed_loop.result import TrackingMetrics, TrackingResult
     from control_design.joint_model import TorqueLimits
 
-__all__ = ["TRACKING_HEADER", "register", "run_track", "save_tracking_plots", "tracking_rows"]
+__all__ = ["TRACKING_CSV", "TRACKING_HEADER", "register", "run_track", "save_tracking_plots", "tracking_rows",
+           "write_tracking_csv"]
+
+#: The time series of a run, beside metrics.json.
+TRACKING_CSV = "tracking.csv"
+
+
+def write_tracking_csv(result: TrackingResult, path: Path) -> Path:
+    """Write ``time`` (s), then per joint ``q_<joint>``, ``qd_<joint>``, ``q_ref_<joint>`` (link side: rad, rad/s
+    or m, m/s) and ``tau_m_<joint>`` (the motor torque demand held over the period, N m, motor side), atomically;
+    one row per control instant, 17 significant digits (a float64 read back exactly)."""
+    from model.files import write_atomic
+
+    names = list(result.joints)
+    header = ["time"] + [f"{k}_{j}" for k in ("q", "qd", "q_ref", "tau_m") for j in names]
+    data = np.column_stack([result.t, result.q, result.qd, result.q_ref, result.tau_m])
+    lines = [",".join(header)] + [",".join(f"{v:.17g}" for v in row) for row in data]
+    return write_atomic(path, "\n".join(lines) + "\n")
 
 
 def save_tracking_plots(result: TrackingResult, out: Path, prefix: str = "",
@@ -67,7 +88,7 @@ def run_track(args: argparse.Namespace) -> int:
     from control_design.reference import check_trajectory_limits, reference_task_name, reference_task_rule, task_trajectory
     from model.robot import load_robot
 
-    kind = controller_kind(args.controller)
+    kind = controller_kind(args.controller, extra=("cascade",))
     finite_or_fail(args.rate, "--rate")
     finite_or_fail(args.segment_time, "--segment-time")
     if args.payload is not None and not (math.isfinite(args.payload) and args.payload >= 0):
@@ -86,6 +107,11 @@ def run_track(args: argparse.Namespace) -> int:
         task = reference_task_name(robot) if args.task is None and args.waypoints is None else args.task
         traj = task_trajectory(robot, task, args.waypoints, args.segment_time)
     check_trajectory_limits(robot, traj)
+    if kind == "cascade":
+        return _run_cascade(args, robot, traj, task)
+    if args.rate is None:
+        from control_design.design import DEFAULT_RATE_HZ
+        args.rate = DEFAULT_RATE_HZ
     design = design_robot(robot, kind, args.bandwidth, args.damping, phase_margin=args.phase_margin, rate_hz=args.rate,
                           analyse=False)
     mismatch = ModelMismatch(payload_mass=args.payload or 0.0, friction_scale=args.friction_scale,
@@ -114,6 +140,7 @@ def run_track(args: argparse.Namespace) -> int:
                                "peak_motor_torque": nominal.peak_motor_torque.tolist()}
         data["max_error_ratio"] = [float(a / b) if b > 0 else None for a, b in zip(met.max_error, nominal.max_error)]
     write_json(out / "metrics.json", data)
+    write_tracking_csv(result, out / TRACKING_CSV)
     save_replay(result, out / REPLAY_FILE)  # for `manip teach ROBOT --result DIR`
     if not args.no_plots:
         save_tracking_plots(result, out, limits=design.model.limits)
@@ -126,7 +153,39 @@ def run_track(args: argparse.Namespace) -> int:
     for line in saturation_warnings(met, design.model.limits):
         print(f"manip track: warning: {line}", file=sys.stderr)
     plots = " (--no-plots: no PNG files)" if args.no_plots else " and 3 PNG files"
-    print(f"wrote {out / 'metrics.json'}, {out / REPLAY_FILE} (for manip teach --result){plots}")
+    print(f"wrote {out / 'metrics.json'}, {out / TRACKING_CSV}, {out / REPLAY_FILE} (for manip teach --result){plots}")
+    return 0
+
+
+def _run_cascade(args: argparse.Namespace, robot: Any, traj: Any, task: str) -> int:
+    """``manip track --controller cascade``: the robot file's P-PI cascade on the plant as it is."""
+    from closed_loop.progress import ProgressLine
+    from closed_loop.simulate import simulate_tracking
+    from control_design.cascade import cascade_from_robot
+    from control_design.errors import DesignSpecError
+
+    for flag, value, neutral in (("--payload", args.payload, None), ("--friction-scale", args.friction_scale, 1.0),
+                                 ("--mass-scale", args.mass_scale, 1.0)):
+        if value != neutral:
+            raise DesignSpecError(f"{flag}: the cascade runs on the robot as it is (no model mismatch), got {value!r}")
+    controller = cascade_from_robot(robot, args.rate)
+    result = simulate_tracking(robot, controller, traj, progress=ProgressLine("track", sys.stderr))
+    met = result.metrics()
+    out = out_dir(args.out)
+    data = met.to_dict()
+    data.update({"task": task, "duration_s": float(result.t[-1] - result.t[0]), "substeps": result.substeps,
+                 "cascade": {key: list(v) if isinstance(v, tuple) else v
+                             for key, v in robot.description.extra["cascade"].items()}})
+    write_json(out / "metrics.json", data)
+    write_tracking_csv(result, out / TRACKING_CSV)
+    save_replay(result, out / REPLAY_FILE)
+    if not args.no_plots:
+        save_tracking_plots(result, out)
+    print(f"{robot.name}: cascade at {controller.rate_hz:g} Hz, {result.t[-1] - result.t[0]:g} s simulated in "
+          f"{met.wall_time:.2f} s")
+    print(format_table(TRACKING_HEADER, tracking_rows(met)))
+    print(f"wrote {out / 'metrics.json'}, {out / TRACKING_CSV}, {out / REPLAY_FILE}"
+          f"{'' if args.no_plots else ' and 3 PNG files'}")
     return 0
 
 
@@ -161,4 +220,4 @@ def register(subparsers: Any, full: bool = True) -> None:
     p.add_argument("--mass-scale", type=float, default=1.0, metavar="X", help="plant link masses = X times the model's")
     p.add_argument("--no-saturation", action="store_true", help="do not clip motor torques at their limits")
     add_no_plots(p)
-    p.set_defaults(func=run_track)
+    p.set_defaults(func=run_track, rate=None)  # None: the design's default rate, or the [cascade] table's
