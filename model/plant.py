@@ -253,12 +253,17 @@ def _build_drive_plant(robot: DynamicArm, *, link_mass_scale: bool = False) -> P
     law = stick_slip_sx(t["B"], t["r"], t["tc_pos"], t["tc_neg"], t["qd"], m, t["hold_pos"], t["hold_neg"])
     ne = lay.ne
 
+    def rows(v: ca.SX, a: int, b: int) -> ca.SX:  # v[a:b] as a column, also when v is 1 x 1 (its empty slice is 1 x 0)
+        return ca.vertcat(*[v[i] for i in range(a, b)]) if b > a else ca.SX(0, 1)
+
+    N = n + lay.ne
+
     def arrange(vel: ca.SX, acc: ca.SX) -> ca.SX:
-        return ca.vertcat(vel[:n], acc[:n], vel[n:], acc[n:], t["extra"])
+        return ca.vertcat(rows(vel, 0, n), rows(acc, 0, n), rows(vel, n, N), rows(acc, n, N), t["extra"])
 
     xdot = arrange(law.qd_held, law.qdd)
     xdot_sliding = arrange(t["qd"], sliding_accel_sx(t["B"], t["r"], t["tc_pos"], t["tc_neg"], m))
-    x_next = ca.vertcat(q, law.qd_next[:n], x[lay.qm_slice], law.qd_next[n:], x[2 * n + 2 * ne:])
+    x_next = ca.vertcat(q, rows(law.qd_next, 0, n), x[lay.qm_slice], rows(law.qd_next, n, N), x[2 * n + 2 * ne:])
     qm = ca.vertcat(*[G[i] * q[i] for i in range(n)])
     for k, i in enumerate(lay.elastic):
         qm[i] = x[lay.qm_slice][k]
