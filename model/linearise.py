@@ -34,6 +34,7 @@ import numpy as np
 from .arm import DynamicArm
 from .arrays import as_joint_vector
 from .errors import InputError
+from .drive_train import drive_layout, equilibrium_state
 from .plant import build_plant
 
 __all__ = ["linearise", "OUTPUT_KINDS"]
@@ -77,6 +78,8 @@ def _linearisation(robot: DynamicArm) -> _Linearisation:
 def _output_matrix(robot: DynamicArm, outputs: str | Sequence[str] | Any) -> tuple[np.ndarray, list[str]]:
     n = robot.n
     G = robot.gear_ratio
+    lay = drive_layout(robot.description)
+    extra = np.zeros((n, lay.nx - 2 * n))  # the drive-train states: zero columns, but the rotor angles for "qm"
     if isinstance(outputs, str):
         outputs = [outputs]
     if isinstance(outputs, (list, tuple)) and all(isinstance(o, str) for o in outputs):
@@ -84,11 +87,15 @@ def _output_matrix(robot: DynamicArm, outputs: str | Sequence[str] | Any) -> tup
         for kind in outputs:
             zero = np.zeros((n, n))
             if kind == "q":
-                blocks.append(np.hstack([np.eye(n), zero]))
+                blocks.append(np.hstack([np.eye(n), zero, extra]))
             elif kind == "qd":
-                blocks.append(np.hstack([zero, np.eye(n)]))
+                blocks.append(np.hstack([zero, np.eye(n), extra]))
             elif kind == "qm":
-                blocks.append(np.hstack([np.diag(G), zero]))
+                row = np.hstack([np.diag(G), zero, extra])
+                for k, i in enumerate(lay.elastic):  # behind an elastic gear: the rotor's own angle
+                    row[i, :] = 0.0
+                    row[i, lay.qm_slice.start + k] = 1.0
+                blocks.append(row)
             else:
                 raise InputError(f"expected kinds from {OUTPUT_KINDS} or a (ny, {2 * n}) matrix, got {kind!r}",
                                  parameter="outputs")
@@ -97,8 +104,8 @@ def _output_matrix(robot: DynamicArm, outputs: str | Sequence[str] | Any) -> tup
             raise InputError("expected at least one output kind, got an empty list", parameter="outputs")
         return np.vstack(blocks), names
     C = np.atleast_2d(np.asarray(outputs, dtype=float))
-    if C.ndim != 2 or C.shape[1] != 2 * n:
-        raise InputError(f"expected a (ny, {2 * n}) output matrix, got shape {np.shape(outputs)}", parameter="outputs")
+    if C.ndim != 2 or C.shape[1] != lay.nx:
+        raise InputError(f"expected a (ny, {lay.nx}) output matrix, got shape {np.shape(outputs)}", parameter="outputs")
     return C, [f"y[{i}]" for i in range(1, C.shape[0] + 1)]
 
 
@@ -119,10 +126,14 @@ def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outpu
         ``(q0, qd0)``: ``u0 = rne(q0, qd0, 0) / G``.
     outputs
         A kind from :data:`OUTPUT_KINDS` (``"q"``, ``"qd"``, ``"qm"`` = ``G q``), a
-        list of kinds (stacked in order), or an explicit (ny, 2n) matrix C.
+        list of kinds (stacked in order), or an explicit (ny, nx) matrix C (nx = 2n, more with drive trains:
+        ``q_m``, ``qd_m`` of each elastic gear, ``tau_m``, ``xi`` of each current loop; ``"qm"`` is then the
+        rotor's own angle behind an elastic gear).
     modes
         (n,) friction modes held (+1, -1 sliding, 0 stuck); default the sliding modes of ``qd0``
-        (module docstring). A stuck joint needs ``qd0_i = 0``.
+        (module docstring). A stuck joint needs ``qd0_i = 0``. The rotor behind an elastic gear takes its
+        joint's mode (turned by the sign of G); the operating point is the drive trains' equilibrium
+        (:func:`model.drive_train.equilibrium_state` for the torques ``G u0``).
 
     Returns
     -------
@@ -143,7 +154,14 @@ def linearise(robot: DynamicArm, q0: Any, qd0: Any = None, u0: Any = None, outpu
         if not np.all(np.isin(m, (-1.0, 0.0, 1.0))) or np.any((m == 0) & (qd0v != 0)):
             raise InputError(f"modes: expected -1, 0 or +1 per joint, 0 only where qd0 = 0, got {m.tolist()}")
     lin = _linearisation(robot)
-    A, B = (np.array(j) for j in lin.jacobians(np.concatenate([q0v, qd0v]), u0v, robot.parameters.vector, m))
+    lay = drive_layout(robot.description)
+    x0 = np.concatenate([q0v, qd0v])
+    if lay.nx > 2 * n:  # drive trains: gears twisted and loops settled to give G u0, rotors at G qd0
+        x0 = equilibrium_state(robot.description, q0v, G * u0v)
+        x0[n:2 * n] = qd0v
+        x0[lay.qdm_slice] = G[list(lay.elastic)] * qd0v[list(lay.elastic)]
+        m = np.concatenate([m, [m[i] if G[i] > 0 else (-m[i] if m[i] != 0 else 0.0) for i in lay.elastic]])
+    A, B = (np.array(j) for j in lin.jacobians(x0, u0v, robot.parameters.vector, m))
     D = np.zeros((C.shape[0], n))
     return control.ss(
         A, B, C, D,
