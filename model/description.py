@@ -370,7 +370,7 @@ _TASK_REQUIRED = ("name", "waypoints")
 _TASK_OPTIONAL = ("segment_time", "labels", "description", "kind", "hold_time")
 #: Task kinds: through the waypoints, segment by segment; or the synchronised trapezoidal point-to-point motion.
 TASK_KINDS = ("waypoints", "ptp")
-_CASCADE_KEYS = ("kp", "ks", "ti", "rate")
+_CASCADE_KEYS = ("kp", "ks", "ti", "rate", "reference")
 
 
 class _Where:
@@ -699,6 +699,11 @@ def _cascade(w: _Where, data: Any, n: int) -> Mapping[str, Any]:
                 if min(values) <= 0:
                     raise w.fail(None, f"cascade.{key}", raw, what)
                 out[key] = values
+    if "reference" in data:
+        with w.collect():
+            if not isinstance(data["reference"], str) or not data["reference"]:
+                raise w.fail(None, "cascade.reference", data["reference"], "a CSV file name, relative to the robot file")
+            out["reference"] = data["reference"]
     if "rate" in data:
         with w.collect():
             rate = _number(w, None, "cascade.rate", data["rate"])

@@ -15,7 +15,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 import numpy as np
 
@@ -23,6 +23,7 @@ import fmu
 from closed_loop import TrackingResult, closed_loop_through_fmu, simulate_tracking
 from control_design import design_robot, reference_task
 from control_design.reference import reference_task_name
+from model.drive_train import has_drive_trains
 from model.robot import load_robot
 from model.tasks import find_task
 
@@ -32,6 +33,7 @@ from .report import Report
 from .sections import (design_section, fmu_section, motion_section, robot_section, task_section, torque_limit_section,
                        tracking_section)
 from .report_retime import retime_section
+from .report_drive_train import drive_train_section
 from .report_identify import identification_section
 from .report_sweep import sweep_section
 from .workspace import workspace_section
@@ -112,6 +114,9 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     progress.note("sampling the reachable workspace of the tool point")
     files += workspace_section(report, out, robot, plots=plots)
 
+    if has_drive_trains(robot.description):
+        return _drive_train_demo(report, out, robot, files, progress, plots=plots, stream=stream)
+
     progress.step("designing the joint loops (decentralised PD and computed torque)")
     report.heading("Control design")
     designs = {}
@@ -177,3 +182,25 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
         print(f"  {path}", file=stream)
     return DemoResult(out=out, report_md=md, report_html=html, fmu_path=fmu_path, fmu_ok=validation.ok, files=files,
                       max_error=max_error, fmu_vs_python=fmu_vs_python)
+
+
+def _drive_train_demo(report: Report, out: Path, robot: Any, files: list[Path], progress: Progress, *, plots: bool,
+                      stream: TextIO) -> DemoResult:
+    """The demo of a robot with drive trains: its cascade on the elastic plant (the FMU, the sweeps and the
+    identification take rigid arms only so far; the report says so)."""
+    progress.total = progress.k + 3  # this path's steps: the cascade, the report, done
+    progress.step("the P-PI cascade on the elastic joint model (python-control) and on the nonlinear plant")
+    section_files, result = drive_train_section(report, out, robot, plots=plots, note=progress.note)
+    files += section_files
+    files.append(write_json(out / "metrics.json", {"cascade": result.metrics().to_dict()}))
+    report.text("Not in this report for a robot with drive trains: the plant FMU, the closed loop through it, the "
+                "sweep and the identification (they take rigid arms so far).")
+    progress.step("writing the report")
+    md, html = report.write(out)
+    files += [md, html]
+    progress.step(f"done: open {html}")
+    print(f"wrote {len(files)} files under {out}/:", file=stream)
+    for path in files:
+        print(f"  {path}", file=stream)
+    return DemoResult(out=out, report_md=md, report_html=html, fmu_path=Path(), fmu_ok=False, files=files,
+                      max_error={"cascade": result.metrics().max_error.tolist()})

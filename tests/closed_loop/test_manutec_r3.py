@@ -1,6 +1,6 @@
 """The Manutec r3 (Modelica's RobotR3.fullRobot) under its P-PI cascade against Dymola's result (issue 23).
 
-Reference: Dymola 2019 FD01's ``fullRobot_ref.csv`` (FMI cross-check; ``tests/data/robotr3/README.md``), link-side
+Reference: Dymola 2019 FD01's ``fullRobot_ref.csv`` (FMI cross-check; ``model/robots/manutec_r3_dymola.csv``), link-side
 speeds of the six axes, 0..1 s. The workbench's run: ``manutec_r3``'s drive trains in the one plant (the
 Python loop, the C fixed-step rule), the cascade sampled at the robot file's 20 kHz, the ``ptp`` task.
 

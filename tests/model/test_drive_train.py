@@ -7,7 +7,7 @@ References, none of them the workbench's code:
 * the current loop's step response with the rotor at rest (the second-order law's textbook closed form);
 * energy conservation of the r3's elastic arm without damping, friction and current loops;
 * the stiff-gear limit: an elastic gear converges on the rigid plant as the stiffness grows;
-* Dymola's initial state of RobotR3.fullRobot (``tests/data/robotr3/README.md``, section 3.8);
+* Dymola's initial state of RobotR3.fullRobot (the MSL regression result as the issue's README lists it, section 3.8);
 * the KinematicPTP2 switching times of the MSL model (same README, section 3.2).
 """
 

@@ -1,8 +1,9 @@
 """Dymola's result for the Modelica Standard Library's RobotR3.fullRobot, and the checks of issue 23 against it.
 
-``tests/data/robotr3/fullRobot_ref.csv``: the FMI cross-check reference (Dymola 2019 FD01, FMI 2.0 CS,
-``axisN_w`` = link-side joint speed of axis N, rad/s, t = 0..1 s; event rows repeat their time stamp).
-Provenance and meaning: ``tests/data/robotr3/README.md``. Nothing here is written from the workbench's model.
+``model/robots/manutec_r3_dymola.csv`` (the robot file's ``[cascade] reference``): the FMI cross-check reference
+``fullRobot_ref.csv`` (Dymola 2019 FD01, FMI 2.0 CS, ``axisN_w`` = link-side joint speed of axis N, rad/s,
+t = 0..1 s; event rows repeat their time stamp), verbatim. Provenance: ``model/robots/URDF-SOURCES.md``.
+Nothing here is written from the workbench's model.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-REFERENCE = Path(__file__).resolve().parents[1] / "data" / "robotr3" / "fullRobot_ref.csv"
+REFERENCE = Path(__file__).resolve().parents[2] / "model" / "robots" / "manutec_r3_dymola.csv"
 #: Friction events of the reference, s: the rows with repeated time stamps before 0.1 s (break-aways of the
 #: rotors of axes 2, 1, 3 and of the joints 5, 4, 6).
 EVENTS = (0.00062883215, 0.00074867799, 0.00154548709, 0.00196265918, 0.00436115405, 0.00466740318)
