@@ -666,10 +666,12 @@ def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None
                          f"tool orientation], got {len(out_names)}", parameter="plant.output_names")
     units, texts = list(plant.output_units), list(plant.output_descriptions)
     states = tuple(Quantity(out_names[k], units[k], texts[k]) for k in range(2 * n))
+    drive = _drive_train_states(plant)  # an elastic gear's rotor, a current loop: local states after [q; qd]
     names = [lk.name or f"joint {i + 1}" for i, lk in enumerate(robot.description.links)]
     inputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque of joint {i + 1} ({names[i]}), motor side")
                    for i in range(n))
     outputs = states + tuple(Quantity(out_names[k], units[k], texts[k]) for k in range(2 * n, 3 * n + 6))
+    states = states + drive
     params = tuple(Quantity(nm, u, d) for nm, u, d in
                    zip(plant.param_names, plant.param_units, plant.param_descriptions))
     tunable = tuple(not nm.startswith("gravity") for nm in plant.param_names)
@@ -678,9 +680,9 @@ def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None
     p_min = tuple(0.0 if nm.split("[")[0] in nonneg else None for nm in plant.param_names)
     p_max = tuple(0.0 if nm.split("[")[0] == "coulomb_friction_neg" else None for nm in plant.param_names)
     # the first 2n outputs are exposed as the states themselves: check they are [q; qd]
-    x_probe = np.random.default_rng(0).standard_normal(2 * n)
+    x_probe = np.random.default_rng(0).standard_normal(int(plant.nx))
     y_probe = np.asarray(plant.out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
-    if not np.array_equal(y_probe[:2 * n], x_probe):
+    if not np.array_equal(y_probe[:2 * n], x_probe[:2 * n]):
         raise InputError("expected the first 2n outputs to be the state [q; qd] itself", parameter="plant.out")
     identifier = model_identifier or robot.description.identifier
     if identifier[0].isdigit():
@@ -702,6 +704,20 @@ def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None
         robot_json=robot_to_json(robot),
         modes=plant,
     )
+
+
+def _drive_train_states(plant: Any) -> tuple[Quantity, ...]:
+    """The plant's states after ``[q; qd]`` (:mod:`model.drive_train`): rotor angles and speeds of the elastic
+    gears, motor torques and loop integrators of the current loops; none for a rigid arm."""
+    out = []
+    for name in plant.state_names[2 * int(plant.n):]:
+        kind, joint = name.rstrip("]").split("[")
+        unit, text = {"q_m": ("rad", "rotor angle behind the elastic gear, motor side"),
+                      "qd_m": ("rad/s", "rotor speed behind the elastic gear, motor side"),
+                      "tau_m": ("N.m", "motor torque of the current loop (follows the demand tau_m input)"),
+                      "xi": ("N.m.s", "current-loop integrator, scaled to torque")}[kind]
+        out.append(Quantity(name if kind != "tau_m" else f"tau_motor[{joint}]", unit, f"joint {joint}: {text}"))
+    return tuple(out)
 
 
 def trivial_spec(step: float = 1e-3, n_inputs: int = 1) -> ModelSpec:
