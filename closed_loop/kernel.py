@@ -41,7 +41,8 @@ from model.compiled_plant import PLANT_STATUS, plant_entry_points
 from model.dynamics.core import source_fingerprint
 from model.dynamics.parameters import DynamicsParameters
 from model.dynamics.singular import singular_dynamics_error
-from model.errors import NumericalError
+from model.errors import InputError, NumericalError
+from model.drive_train import has_drive_trains
 from model.plant import STEP_FUNCTIONS, build_plant
 from model.robot import Robot
 from model.errors import ToolchainError
@@ -108,6 +109,10 @@ class ClosedLoopKernel:
         self.kind = kind
         n = robot.n
         desc = robot.description
+        if has_drive_trains(desc):  # kernel.c holds [q; qd] and n modes: the rigid plant's layout
+            raise InputError(f"{desc.name}: the compiled closed loop (sweeps) takes rigid drive trains only so far; "
+                             f"this robot has elastic gears, current loops or friction peaks (run manip track)",
+                             parameter="robot")
         self.law = control_law(kind, n, robot)
         self.function = controller_function(self.law)
         self.controller_name = self.function.name()

@@ -7,8 +7,8 @@ the rotor angle ``q_m`` and ``G q``), friction (viscous ``B``, Coulomb ``Tc`` an
 the break-away factor ``peak``) on the rotor or on the joint, and optionally a
 current loop that makes the motor torque ``tau_m`` follow the demand ``u``.
 
-Equations (the Modelica Standard Library's ``RobotR3`` drive trains, derived in
-``docs/drive-train.md``). With ``tau_s = c (q_m - G q) + d (qd_m - G qd)``:
+Equations (the Modelica Standard Library's ``RobotR3`` drive trains; the robot-file keys and these
+equations: ``docs/robot-file.md``, "Drive trains"). With ``tau_s = c (q_m - G q) + d (qd_m - G qd)``:
 
 * arm ``B(q) qdd + h(q, qd) + F_c = tau_j``, ``tau_j = G tau_m`` (rigid) or ``G tau_s`` (elastic);
   an elastic joint's rotor is not part of ``B`` (its ``G^2 Jm`` is not added);
