@@ -181,6 +181,19 @@ def format_info(desc: RobotDescription) -> str:
                   format_table(["j", "name", "qd_max", "unit"],
                                [[i + 1, lk.name, "-" if lk.velocity_limit is None else exact(lk.velocity_limit),
                                  f"{units[i]}/s"] for i, lk in enumerate(desc.links)])]
+    if any(lk.is_elastic or lk.has_current_loop or lk.friction_peak != 1.0 for lk in desc.links):
+        def opt(v: float | None) -> str:
+            return "-" if v is None else exact(v)
+
+        lines += ["", "Drive trains (motor side; docs/robot-file.md, Drive trains)",
+                  format_table(["j", "name", "gear", "c [N m/rad]", "d [N m s/rad]", "friction on", "peak",
+                                "k [N m/A]", "current loop w [rad/s]", "D", "Ra [Ohm]"],
+                               [[i + 1, lk.name, "elastic" if lk.is_elastic else "rigid", opt(lk.gear_stiffness),
+                                 exact(lk.gear_damping) if lk.is_elastic else "-",
+                                 (lk.friction_side if lk.is_elastic else "rotor = joint"), exact(lk.friction_peak),
+                                 opt(lk.torque_constant), opt(lk.current_bandwidth),
+                                 exact(lk.current_damping) if lk.has_current_loop else "-", opt(lk.armature_resistance)]
+                                for i, lk in enumerate(desc.links)])]
     file_name = Path(desc.path).name if desc.path else "the robot file"
     rows = []
     for i, lk in enumerate(desc.links):
