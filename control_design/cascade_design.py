@@ -24,7 +24,8 @@ import numpy as np
 from model.drive_train import rigid_arm_description
 from model.robot import Robot
 
-__all__ = ["JointCascade", "cascade_loops", "motor_speed_tf"]
+__all__ = ["ElasticCheck", "JointCascade", "bode_figure", "cascade_loops", "check_on_elastic", "link_angle_tf",
+           "motor_speed_tf"]
 
 
 def motor_speed_tf(Jm: float, Jl: float, G: float, c: float | None, d: float = 0.0) -> control.TransferFunction:
@@ -143,3 +144,61 @@ def bode_figure(loops: list[JointCascade]) -> Any:
     ax_mag.set_title("P-PI cascade: speed loop on the elastic joint model vs the rigid one")
     fig.tight_layout()
     return fig
+
+
+@dataclass(frozen=True)
+class ElasticCheck:
+    """A joint loop designed on the rigid model, checked on the elastic joint model.
+
+    Attributes
+    ----------
+    name
+        Joint name.
+    stable_rigid, stable_elastic
+        Whether the closed loop's poles are all in the left half plane on each model (continuous loop, the
+        sampling's half-period delay as a first-order Pade term).
+    margins_rigid, margins_elastic
+        python-control's ``margin`` of the open loop on each model: (gain margin, phase margin deg, wcg, wcp).
+    """
+
+    name: str
+    stable_rigid: bool
+    stable_elastic: bool
+    margins_rigid: tuple[float, float, float, float]
+    margins_elastic: tuple[float, float, float, float]
+
+
+def link_angle_tf(Jm: float, Jl: float, G: float, c: float | None, d: float = 0.0) -> control.TransferFunction:
+    """``G q / tau_m`` of one joint (the motor-side image of the link angle), rad/(N m): elastic or rigid."""
+    Jl_m = Jl / (G * G)
+    if c is None:
+        return control.tf([1.0], [Jm + Jl_m, 0.0, 0.0])
+    return control.tf([d, c], [Jm * Jl_m, (Jm + Jl_m) * d, (Jm + Jl_m) * c, 0.0, 0.0])
+
+
+def check_on_elastic(robot: Robot, design: Any, q: Any = None) -> list[ElasticCheck]:
+    """Each decentralised loop of ``design`` (gains on ``G q``, :class:`control_design.loops.JointLoop`) closed
+    around the elastic joint model of ``robot`` and around the rigid one (current loop included, arm frozen at
+    ``q``): a rigid-model design verified on the elastic plant. Joints with a rigid gear give equal answers."""
+    desc = robot.description
+    q = desc.q_rest if q is None else np.asarray(q, dtype=float)
+    B = Robot(rigid_arm_description(desc)).inertia(q)
+    out = []
+    for i, (lk, loop) in enumerate(zip(desc.links, design.loops)):
+        g = loop.gains
+        dt = loop.dt or 0.0
+        C = control.tf([g.Kd, g.Kp, g.Ki], [1.0, 0.0]) if g.Ki else control.tf([g.Kd, g.Kp], [1.0])
+        if dt > 0:  # zero-order hold: half a period of delay
+            num, den = control.pade(dt / 2, 1)
+            C = C * control.tf(num, den)
+        if lk.has_current_loop:
+            w, D = lk.current_bandwidth, lk.current_damping
+            C = C * control.tf([w * w], [1.0, 2 * D * w, w * w])
+        Jl = float(B[i, i]) - (0.0 if lk.is_elastic else lk.gear_ratio ** 2 * lk.motor_inertia)
+        res = []
+        for c in (None, lk.gear_stiffness):
+            L = C * link_angle_tf(lk.motor_inertia, Jl, lk.gear_ratio, c, lk.gear_damping)
+            poles = control.poles(control.feedback(L, 1))
+            res.append((bool(np.all(np.real(poles) < 0)), _margins(L)))
+        out.append(ElasticCheck(lk.name or f"joint{i + 1}", res[0][0], res[1][0], res[0][1], res[1][1]))
+    return out
