@@ -80,6 +80,66 @@ def test_cascade_through_the_plant_fmu_reproduces_dymola(r3_fmu):
     assert validate_result(R3.as_result(t, QD), R3.reference(), 0.0, 1.0) is None
 
 
+def test_plant_fmu_and_cascade_fmu_reproduce_dymola(r3_fmu, tmp_path):
+    """The same loop with the cascade as an FMU too (its PI integrators a sampled discrete state, starting from
+    the equilibrium's values): two FMUs, FMPy's CS, the issue's three rules."""
+    from closed_loop.cascade_fmu import export_cascade_fmu
+    from fmpy.cross_check import validate_result
+
+    robot, _, md, unzipped = r3_fmu
+    G = robot.gear_ratio
+    controller = cascade_from_robot(robot)
+    traj = robot_tasks(robot.description)["ptp"].trajectory(controller.dt)
+    x0 = build_plant(robot).x0
+    qm0, qdm0 = G * x0[:6], np.zeros(6)
+    qm0[:3] = x0[12:15]
+    controller.hold_from(qm0, qdm0, Reference(*traj.sample(0.0)), robot.gravload(x0[:6]) / G)
+    cpath = export_cascade_fmu(controller, robot, tmp_path / "cascade.fmu", platforms="linux64")
+    cmd = fmpy.read_model_description(cpath)
+    cvr = {v.name: v.valueReference for v in cmd.modelVariables}
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    plant = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="plant")
+    ctrl = FMU2Slave(guid=cmd.guid, unzipDirectory=fmpy.extract(cpath),
+                     modelIdentifier=cmd.coSimulation.modelIdentifier, instanceName="cascade")
+    for s in (plant, ctrl):
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+    vq = [vr[f"q[{i}]"] for i in range(1, 7)]
+    vqd = [vr[f"qd[{i}]"] for i in range(1, 7)]
+    vqm, vqdm = [vr[f"q_m[{i}]"] for i in (1, 2, 3)], [vr[f"qd_m[{i}]"] for i in (1, 2, 3)]
+    c_in = [cvr[f"{s}[{i}]"] for s in ("q_ref", "qd_ref", "q_m", "qd_m") for i in range(1, 7)]
+    c_out = [cvr[f"tau_m[{i}]"] for i in range(1, 7)]
+    p_in = [vr[f"tau_m[{i}]"] for i in range(1, 7)]
+    steps = int(round(1.0 / controller.dt))
+    t = np.arange(steps + 1) * controller.dt
+    QD = np.empty((steps + 1, 6))
+    try:
+        for k in range(steps + 1):
+            q, qd = np.array(plant.getReal(vq)), np.array(plant.getReal(vqd))
+            QD[k] = qd
+            if k == steps:
+                break
+            qm, qdm = G * q, G * qd
+            qm[:3], qdm[:3] = plant.getReal(vqm), plant.getReal(vqdm)
+            q_ref, qd_ref, _ = traj.sample(t[k])
+            ctrl.setReal(c_in, [*q_ref, *qd_ref, *qm, *qdm])
+            u = ctrl.getReal(c_out)
+            ctrl.doStep(currentCommunicationPoint=t[k], communicationStepSize=controller.dt)
+            plant.setReal(p_in, u)
+            plant.doStep(currentCommunicationPoint=t[k], communicationStepSize=controller.dt)
+    finally:
+        for s in (plant, ctrl):
+            s.terminate()
+            s.freeInstance()
+    cmp = R3.compare(t, QD)
+    assert np.all(cmp.worst < 0.01), cmp.worst
+    assert np.all(np.abs(cmp.breakaway[3:]) < 5e-4), cmp.breakaway
+    assert validate_result(R3.as_result(t, QD), R3.reference(), 0.0, 1.0) is None
+
+
 def test_model_exchange_states_and_derivatives(r3_fmu):
     from ctypes import c_double
 
