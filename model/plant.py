@@ -305,6 +305,5 @@ def build_plant_rigid_names(robot: DynamicArm, link_mass_scale: bool) -> Plant:
     desc = robot.description
     bare = _dc.replace(desc, links=tuple(_dc.replace(lk, **{k: v for k, v in DRIVE_TRAIN_DEFAULTS.items()})
                                          for lk in desc.links))
-    from .robot import Robot
-
-    return build_plant(Robot(bare, motor_model=robot.dynamics.motor_model), link_mass_scale=link_mass_scale)
+    rigid = type(robot)(bare, motor_model=robot.dynamics.motor_model)  # type: ignore[call-arg]  # a Robot
+    return build_plant(rigid, link_mass_scale=link_mass_scale)

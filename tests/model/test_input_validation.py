@@ -134,7 +134,7 @@ def test_a_urdf_robot_file_collects_its_problems_too(tmp_path):
         load_description(path)
     assert [p.removeprefix(f"{path}") for p in info.value.problems] == [
         ": field 'gravty' = [0.0, 0.0, -9.81]: expected one of the known keys of a URDF robot file (name, urdf, "
-        "base_link, tip_link, joints, gravity, rest, description, source, units, tasks, base, tool); this key is "
+        "base_link, tip_link, joints, gravity, rest, description, source, units, tasks, base, tool, cascade); this key is "
         "unknown; did you mean 'gravity'?",
         ", joint 'j1': field 'gear_ratio' = 0.0: expected a non-zero number",
         ", joint 'j2': field 'motor_inertia' = -1.0: expected a number >= 0",

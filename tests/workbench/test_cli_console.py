@@ -118,7 +118,7 @@ def test_a_saturating_run_says_which_motor_how_long_and_where_its_limit_comes_fr
     out = tmp_path / "track"
     res = _manip("track", "scara", "--controller", "ct", "--segment-time", "0.5", "--out", str(out), "--no-plots")
     assert res.returncode == 0, res.stderr
-    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "tracking.npz"]  # --no-plots: no PNG; the replay for manip teach stays
+    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "tracking.csv", "tracking.npz"]  # --no-plots: no PNG; the replay and the CSV stay
     met = json.loads((out / "metrics.json").read_text())
     warnings = [line for line in res.stderr.splitlines() if line.startswith("manip track: warning: motor")]
     saturated = [j for j, f in enumerate(met["saturated_fraction"]) if f > 0]
