@@ -207,6 +207,10 @@ def register(subparsers: Any, full: bool = True) -> None:
     if not full:
         return
     add_spec_args(p)
+    for action in p._actions:  # track also runs the robot file's P-PI cascade
+        if "--controller" in action.option_strings:
+            action.metavar = action.metavar[:-1] + ",cascade}"
+            action.help = (action.help or "") + "; cascade: the robot file's [cascade] P-PI loop on the motor side"
     src = p.add_mutually_exclusive_group()
     src.add_argument("--task", default=None,
                      help="a [[tasks]] entry of the robot file or 'tour' (default: the file's first task, else tour)")
