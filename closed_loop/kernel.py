@@ -20,20 +20,31 @@ the schedule's reference arrays, ``-ffp-contract=off``), so the samples agree wi
 :func:`~closed_loop.simulate.simulate_tracking` to rounding (the tests hold them to
 1e-12; the only difference is the link-mass scale, a multiplication by 1.0 where the
 Python loop's plant folds the masses into constants). Metrics are accumulated in C
-during the run. A plant without Coulomb friction (nothing stuck) skips the event
+during the run.
+
+Drive trains (:mod:`model.drive_train`: elastic gears, current loops, friction peaks) are the
+same plant with more states: the kernel carries the plant's whole state (``nx``, ``nz``
+friction modes), starts it as the Python loop does (the static equilibrium of
+:func:`~model.drive_train.equilibrium_state` under the plant's gravity), and a motor-side
+law, the P-PI cascade (kind ``'cascade'``, :func:`~control_design.cascade.cascade_law`),
+reads the rotor angles and speeds, its integrators started holding the arm
+(:meth:`~control_design.cascade.CascadeController.holding_state`). A plant without Coulomb friction (nothing stuck) skips the event
 indicators altogether: its cost is that of the plain RK4 loop.
 """
 
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 import numpy as np
 
+from control_design.cascade import CascadeController, cascade_fingerprint, cascade_law
 from control_design.controllers import LawController
+from control_design.reference import Reference
 from control_design.errors import DesignSpecError
 from control_design.laws import control_law, controller_function, law_fingerprint
 from model.codegen import PLANT_STEP_SOURCES, CompiledLibrary, Progress, build_library
@@ -41,8 +52,8 @@ from model.compiled_plant import PLANT_STATUS, plant_entry_points
 from model.dynamics.core import source_fingerprint
 from model.dynamics.parameters import DynamicsParameters
 from model.dynamics.singular import singular_dynamics_error
-from model.errors import InputError, NumericalError
-from model.drive_train import has_drive_trains
+from model.errors import NumericalError
+from model.drive_train import drive_layout, equilibrium_state, has_drive_trains
 from model.plant import STEP_FUNCTIONS, build_plant
 from model.robot import Robot
 from model.errors import ToolchainError
@@ -57,7 +68,7 @@ KERNEL_SOURCE = Path(__file__).resolve().parent / "c" / "kernel.c"
 _N_METRICS = 5
 
 _P = ctypes.c_void_p
-_ARGTYPES = [_P, _P, _P, _P, _P, ctypes.c_double, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P, _P]
+_ARGTYPES = [_P, _P, _P, _P, _P, ctypes.c_double, *([_P] * 16)]
 _PLANT_PREFIX = "plant_"
 
 
@@ -70,7 +81,7 @@ class KernelRun:
     max_error, rms_error
         (n,) max and RMS ``|q_ref - q|`` over the control samples, rad or m.
     peak_motor_torque, peak_motor_velocity
-        (n,) max ``|tau_m|`` (N m) and ``|G qd|`` (rad/s).
+        (n,) max ``|tau_m|`` (N m) and ``|qd_m|`` (rad/s: ``G qd``, or an elastic gear's rotor speed).
     saturated_fraction
         (n,) fraction of the samples with ``|tau_m|`` at its limit.
     diverged
@@ -99,7 +110,7 @@ class ClosedLoopKernel:
     robot
         The controller's robot model; the plant is this robot with other parameters and link masses.
     kind
-        The controller kind (:data:`~control_design.laws.LAW_KINDS`).
+        The controller kind (:data:`~control_design.laws.LAW_KINDS`, or ``'cascade'``: the P-PI cascade).
     progress
         Receives the build's :class:`~model.codegen.BuildEvent` (a cache hit is one event).
     """
@@ -109,15 +120,17 @@ class ClosedLoopKernel:
         self.kind = kind
         n = robot.n
         desc = robot.description
-        if has_drive_trains(desc):  # kernel.c holds [q; qd] and n modes: the rigid plant's layout
-            raise InputError(f"{desc.name}: the compiled closed loop (sweeps) takes rigid drive trains only so far; "
-                             f"this robot has elastic gears, current loops or friction peaks (run manip track)",
-                             parameter="robot")
-        self.law = control_law(kind, n, robot)
+        self.layout = drive_layout(desc)
+        self.drive_trains = has_drive_trains(desc)
+        self.law = cascade_law(n) if kind == "cascade" else control_law(kind, n, robot)
+        #: The law reads the rotor angles and speeds (q_m, qd_m) in place of q, qd.
+        self.motor_side = kind == "cascade"
         self.function = controller_function(self.law)
         self.controller_name = self.function.name()
         key = (f"closed-loop kernel|{kind}|{n}|{law_fingerprint()}|{desc.digest()}|{robot.motor_model}"
                f"|{','.join(STEP_FUNCTIONS)}|{source_fingerprint()}")
+        if kind == "cascade":
+            key += f"|{cascade_fingerprint()}"
         stem = f"kernel-{desc.identifier}-{robot.motor_model}-{kind}"
         self.library: CompiledLibrary
         self.library, self.build_info = build_library(
@@ -132,8 +145,11 @@ class ClosedLoopKernel:
         f = self.function
         self._in_names = [f.name_in(i) for i in range(f.n_in())]
         self._state_index = self._in_names.index("z") if "z" in self._in_names else -1
+        rotor = np.full(n, -1, dtype=np.int64)
+        rotor[list(self.layout.elastic)] = np.arange(self.layout.ne)
+        self._rotor = rotor
 
-    def run(self, controller: LawController, schedule: Schedule, plant_parameters: DynamicsParameters, *,
+    def run(self, controller: "LawController | CascadeController", schedule: Schedule, plant_parameters: DynamicsParameters, *,
             link_mass_scale: float = 1.0, delay: bool = False, record: bool = False,
             values: Mapping[str, Any] | None = None) -> KernelRun:
         """Run ``controller`` on the plant along ``schedule`` in one C call.
@@ -191,15 +207,17 @@ class ClosedLoopKernel:
                 inputs.append(np.ascontiguousarray(values[name], dtype=np.float64))
         ctrl_in = (ctypes.c_void_p * len(inputs))(*[None if a is None else a.ctypes.data for a in inputs])
         steps = schedule.steps
+        lay = self.layout
         dims = np.array([n, len(inputs), len(self.law.signals), self._state_index, int(delay), schedule.substeps,
-                         steps], dtype=np.int64)
+                         steps, lay.nx, lay.nz, int(self.motor_side)], dtype=np.int64)
         G = np.ascontiguousarray(controller.G, dtype=np.float64)
         tau_sat = None if controller.tau_m_max is None else np.ascontiguousarray(controller.tau_m_max * SATURATION_MARGIN)
         refs = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q_ref, schedule.qd_ref, schedule.qdd_ref)]
-        x0 = [np.ascontiguousarray(a, dtype=np.float64) for a in (schedule.q0, schedule.qd0)]
+        x0, z0 = self._start(controller, schedule, plant_parameters, float(link_mass_scale))
         metrics = np.zeros((_N_METRICS, n))
-        fault = np.zeros(1 + 2 * n)
+        fault = np.zeros(1 + lay.nx)
         traj = [np.empty((steps + 1, n)) for _ in range(3)] if record else [None, None, None]
+        qdm = np.empty((steps + 1, n)) if record and lay.ne else None
         last = ctypes.c_longlong(0)
 
         def ptr(a: np.ndarray | None) -> int | None:
@@ -207,7 +225,8 @@ class ClosedLoopKernel:
 
         status = self._fn(ctypes.cast(self._plant, _P), self._ctrl[0], self._ctrl[1], ptr(dims), ctrl_in,
                           float(schedule.dt), ptr(p), ptr(G), ptr(tau_sat), *(ptr(a) for a in refs),
-                          *(ptr(a) for a in x0), ptr(metrics), *(ptr(a) for a in traj), ctypes.byref(last), ptr(fault))
+                          ptr(x0), ptr(z0), ptr(self._rotor) if lay.ne else None, ptr(metrics),
+                          *(ptr(a) for a in traj), ptr(qdm), ctypes.byref(last), ptr(fault))
         # a failure in the period from t_k leaves last = k + 1 (the loop's counter moved on), one at the start 0
         t_fail = float(schedule.t[min(max(int(last.value) - 1, 0), steps)])
         if status == 2:
@@ -223,9 +242,45 @@ class ClosedLoopKernel:
         result = None
         if record and status == 0:
             result = schedule.result(self.robot, self.kind, *traj, controller.tau_m_max, 0.0)
+            if qdm is not None:
+                result = dataclasses.replace(result, rotor_qd=qdm)
         return KernelRun(max_error=metrics[0].copy(), rms_error=metrics[1].copy(), peak_motor_torque=metrics[2].copy(),
                          peak_motor_velocity=metrics[3].copy(), saturated_fraction=metrics[4].copy(),
                          diverged=status == 1, t_end=float(schedule.t[min(k, steps)]), result=result)
+
+
+    def plant_gravity(self, q: np.ndarray, plant_parameters: DynamicsParameters, link_mass_scale: float = 1.0
+                      ) -> np.ndarray:
+        """(n,) the plant's gravity torque at ``q`` (joint side, N m or N) with its link masses scaled.
+
+        Gravity is linear in each body's mass and first moment, and the scale multiplies both for the links
+        and neither for the payload: ``g_s = g_payload + s g_links`` with ``g_links`` the plant without its
+        payload and ``g_payload = g - g_links``. At ``s = 1`` it is ``gravload(q, p)`` itself.
+        """
+        g = self.robot.gravload(q, plant_parameters)
+        if link_mass_scale == 1.0:
+            return g
+        links = self.robot.gravload(q, plant_parameters.with_payload(0.0, [0.0, 0.0, 0.0]))
+        return (g - links) + link_mass_scale * links
+
+    def _start(self, controller: Any, schedule: Schedule, plant_parameters: DynamicsParameters,
+               link_mass_scale: float) -> tuple[np.ndarray, np.ndarray | None]:
+        """The start state (nx,) and the controller state's start (n,) or None (zero), as the Python loop's."""
+        n, lay = self.robot.n, self.layout
+        x0 = np.concatenate([schedule.q0, schedule.qd0])
+        if not (self.drive_trains or self.motor_side):
+            return np.ascontiguousarray(x0), None
+        g = self.plant_gravity(schedule.q0, plant_parameters, link_mass_scale)
+        if lay.nx > 2 * n:  # as simulate_tracking: the static equilibrium, then the start speeds
+            x0 = equilibrium_state(self.robot.description, schedule.q0, g)
+            x0[n:2 * n] = schedule.qd0
+        z0 = None
+        if self.motor_side:
+            G = np.asarray(controller.G, dtype=float)
+            qm, qdm = lay.motor_state(x0, G)
+            ref = Reference(schedule.q_ref[0], schedule.qd_ref[0], schedule.qdd_ref[0])
+            z0 = np.ascontiguousarray(controller.holding_state(qm, qdm, ref, g / G), dtype=np.float64)
+        return np.ascontiguousarray(x0, dtype=np.float64), z0
 
 
 _KERNELS: dict[tuple[str, str, str], ClosedLoopKernel] = {}

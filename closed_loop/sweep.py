@@ -87,7 +87,8 @@ def case_setup(spec: SweepSpec) -> _Setup:
         robot = load_robot(spec.robot)
         traj = task_trajectory(robot, spec.task, spec.waypoints, spec.segment_time)
         # the design's decoupled model (design_robot's default), computed once for every design of the sweep
-        jm = decoupled_model(robot, reference_task(robot), reference_name=reference_task_name(robot))
+        jm = (None if spec.controller == "cascade"  # the cascade's gains are the robot file's: no design
+              else decoupled_model(robot, reference_task(robot), reference_name=reference_task_name(robot)))
         _SETUPS[key] = _Setup(robot, traj, closed_loop_kernel(robot, spec.controller), jm, {}, {})
     return _SETUPS[key]
 
@@ -101,11 +102,13 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
     """
     from control_design.design import DEFAULT_RATE_HZ
     from control_design.loops import gains_arrays
+    from model.drive_train import drive_substeps
 
     from .schedule import Schedule, default_substeps
 
     robot = setup.robot
-    rate = values.get("rate_hz", spec.rate_hz or DEFAULT_RATE_HZ)
+    cascade = spec.controller == "cascade"  # the robot file's P-PI cascade, at its [cascade] rate by default
+    rate = values.get("rate_hz", spec.rate_hz or (None if cascade else DEFAULT_RATE_HZ))
     bw = values.get("bandwidth", spec.bandwidth)
     zeta = values.get("damping", spec.damping)
 
@@ -114,7 +117,12 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
 
     controller = setup.controllers.get(rate)
     if controller is None:
-        controller = design(spec.bandwidth, spec.damping).controller(rate, saturate=spec.saturate)
+        if cascade:
+            from control_design.cascade import cascade_from_robot
+
+            controller = cascade_from_robot(robot, rate)
+        else:
+            controller = design(spec.bandwidth, spec.damping).controller(rate, saturate=spec.saturate)
         if len(setup.controllers) < 64:
             setup.controllers[rate] = controller
     gains = None
@@ -142,7 +150,9 @@ def _case_inputs(spec: SweepSpec, setup: _Setup, values: dict[str, float]) -> tu
             setup.schedules[rate] = sched
     # The sub-steps of the Python loop for this plant; scaled links: B_s >= min(s, 1) B, so the friction
     # rate is at most 1 / min(s, 1) times that of the unscaled plant.
-    sub = default_substeps(plant, controller.dt, sched.q0, rate_factor=1.0 / min(mass_scale, 1.0))
+    # Drive trains: the Python loop's sub-steps for their fastest rate (drive_substeps).
+    sub = (drive_substeps(robot.description, controller.dt)
+           or default_substeps(plant, controller.dt, sched.q0, rate_factor=1.0 / min(mass_scale, 1.0)))
     sched = dataclasses.replace(sched, substeps=sub)
     delay = bool(values.get("delay", 1.0 if spec.delay else 0.0) >= 0.5)
     return controller, sched, p, mass_scale, delay, gains

@@ -3,7 +3,7 @@
 A spec is a TOML file (or the same keys as a dict)::
 
     robot = "scara"                 # built-in name or robot file
-    controller = "ct"               # pd, pd-g, pd-ff, pid, ct
+    controller = "ct"               # pd, pd-g, pd-ff, pid, ct, or cascade (the robot file's P-PI cascade)
     bandwidth = 50.0                # rad/s (optional, as `manip track`)
     damping = 0.7                   # (optional)
     rate_hz = 1000.0                # Hz (optional)
@@ -26,6 +26,12 @@ Coulomb friction times this) or ``friction_scale_J`` (joint J only, 1-based),
 ``link_mass_scale``, ``bandwidth`` (rad/s, a design per case), ``damping``,
 ``rate_hz`` (Hz, the schedule's periods) and ``delay`` (0 or 1 control period: a grid
 takes both, a sample rounds). Plant quantities are unknown to the controller.
+
+``controller = "cascade"`` is the robot file's motor-side P-PI cascade (its ``[cascade]``
+table: gains and rate, :mod:`control_design.cascade`) on a robot with drive trains (elastic
+gears, current loops, friction peaks: the compiled closed loop carries their states); its
+gains are the file's, so ``bandwidth`` and ``damping`` (fixed or varied) are refused, and
+``rate_hz`` defaults to the table's ``rate``.
 
 Random cases are seeded per case (case i draws from ``SeedSequence([seed, i])``), so
 a case's values do not depend on N or on who computes it; Sobol and grid designs are
@@ -186,8 +192,13 @@ def spec_from_dict(data: Mapping[str, Any], source: str = "spec", n_joints: int 
     controller = text("controller", "pd")
     from control_design.laws import LAW_KINDS
 
-    if controller not in LAW_KINDS:
-        raise fail("controller", f"expected one of {', '.join(LAW_KINDS)}, got {controller!r}")
+    if controller not in (*LAW_KINDS, "cascade"):
+        raise fail("controller", f"expected one of {', '.join(LAW_KINDS)}, cascade, got {controller!r}")
+    if controller == "cascade":
+        for key in ("bandwidth", "damping"):
+            if key in data or key in (data.get("vary") or {}):
+                raise fail(key if key in data else f"vary.{key}",
+                           "the cascade's gains are the robot file's [cascade] table: no design to vary")
     method = text("method", "random")
     if method not in METHODS:
         raise fail("method", f"expected one of {', '.join(METHODS)}, got {method!r}")

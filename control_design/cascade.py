@@ -16,17 +16,53 @@ crossover its result approaches it (the r3's test states by how much).
 
 from __future__ import annotations
 
+import hashlib
+from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from model.robot import Robot
 
 from .controllers import Controller, _vec
 from .errors import DesignSpecError
+from .laws import NO_LIMIT, ControlLaw
 from .reference import Reference
 
-__all__ = ["CascadeController", "cascade_from_robot"]
+__all__ = ["CascadeController", "cascade_fingerprint", "cascade_from_robot", "cascade_law"]
+
+#: The law's parameter inputs, in input order (``dt`` the period, s, a scalar).
+_PARAMETERS = ("kp", "ks", "ti", "torque_constant", "gear_ratio", "dt")
+
+
+def cascade_law(n: int) -> ControlLaw:
+    """The cascade of ``n`` joints as a :class:`~control_design.laws.ControlLaw` of kind ``'cascade'`` (the law the
+    compiled closed loop runs, :mod:`closed_loop.kernel`): the module docstring's equations, operation for
+    operation as :meth:`CascadeController.update_motor`.
+
+    Signals ``q_m``, ``qd_m`` (rotor angle and speed, motor side, rad, rad/s), ``q_d``, ``qd_d`` (reference, joint
+    side); parameters ``kp`` (1/s), ``ks`` (A s/rad), ``ti`` (s), ``torque_constant`` (N m/A), ``gear_ratio``, ``dt``
+    (s); state ``z`` (the PI integrator ``x``, rad/s); outputs ``tau_m`` (N m, before saturation) and ``z_next``.
+    """
+    sym = {name: ca.SX.sym(name, n) for name in ("q_m", "qd_m", "q_d", "qd_d", *_PARAMETERS[:-1], "z")}
+    dt = ca.SX.sym("dt")
+    qm, qdm, q_d, qd_d, z = (sym[k] for k in ("q_m", "qd_m", "q_d", "qd_d", "z"))
+    kp, ks, ti, k, G = (sym[name] for name in _PARAMETERS[:-1])
+    e = G * qd_d + kp * (G * q_d - qm) - qdm
+    tau_m = k * ks * (z + e)
+    z_next = z + dt * e / ti
+    signals = ("q_m", "qd_m", "q_d", "qd_d")
+    params = [*((name, sym[name]) for name in _PARAMETERS[:-1]), ("dt", dt)]
+    inputs = [(name, sym[name]) for name in signals] + params + [("z", z)]
+    function = ca.Function("cascade", [s for _, s in inputs], [tau_m, z_next], [name for name, _ in inputs],
+                           ["tau_m", "z_next"])
+    return ControlLaw("cascade", function, signals, tuple((name, int(s.numel())) for name, s in params), ("z",))
+
+
+def cascade_fingerprint() -> str:
+    """SHA-256 of this module: editing the law invalidates its compiled code."""
+    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
 
 
 class CascadeController(Controller):
@@ -54,9 +90,21 @@ class CascadeController(Controller):
     def _error(self, qm: np.ndarray, qdm: np.ndarray, ref: Reference) -> np.ndarray:
         return self.G * ref.qd + self.kp * (self.G * ref.q - qm) - qdm
 
+    def holding_state(self, qm: np.ndarray, qdm: np.ndarray, ref: Reference, tau_m: np.ndarray) -> np.ndarray:
+        """(n,) the integrators (rad/s) whose first output at rotor angles ``qm``, speeds ``qdm`` is ``tau_m`` (N m)."""
+        return np.asarray(tau_m, dtype=float) / (self.k * self.ks) - self._error(qm, qdm, ref)
+
     def hold_from(self, qm: np.ndarray, qdm: np.ndarray, ref: Reference, tau_m: np.ndarray) -> None:
         """Set the integrators so that the first output is ``tau_m`` (N m): the loop starts in equilibrium."""
-        self.x = np.asarray(tau_m, dtype=float) / (self.k * self.ks) - self._error(qm, qdm, ref)
+        self.x = self.holding_state(qm, qdm, ref, tau_m)
+
+    def parameter_values(self) -> dict[str, np.ndarray]:
+        """The parameter inputs of :func:`cascade_law` and its saturation (``tau_m_max``, :data:`NO_LIMIT` without
+        limits), by name, in input order."""
+        limit = np.full(self.n, NO_LIMIT) if self.tau_m_max is None else np.asarray(self.tau_m_max, dtype=float)
+        return {"kp": self.kp.copy(), "ks": self.ks.copy(), "ti": self.ti.copy(), "torque_constant": self.k.copy(),
+                "gear_ratio": np.asarray(self.G, dtype=float).copy(), "dt": np.array([self.dt]),
+                "tau_m_max": limit.copy()}
 
     def update_motor(self, t: float, q: np.ndarray, qd: np.ndarray, qm: np.ndarray, qdm: np.ndarray,
                      ref: Reference) -> np.ndarray:
