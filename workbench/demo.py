@@ -186,15 +186,16 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
 
 def _drive_train_demo(report: Report, out: Path, robot: Any, files: list[Path], progress: Progress, *, plots: bool,
                       stream: TextIO) -> DemoResult:
-    """The demo of a robot with drive trains: its cascade on the elastic plant (the FMU, the sweeps and the
-    identification take rigid arms only so far; the report says so)."""
+    """The demo of a robot with drive trains: its cascade on the elastic plant (the report names what it leaves out:
+    the FMU and the sweeps, which take drive trains, and the identification, which takes rigid arms only so far)."""
     progress.total = progress.k + 3  # this path's steps: the cascade, the report, done
     progress.step("the P-PI cascade on the elastic joint model (python-control) and on the nonlinear plant")
     section_files, result = drive_train_section(report, out, robot, plots=plots, note=progress.note)
     files += section_files
     files.append(write_json(out / "metrics.json", {"cascade": result.metrics().to_dict()}))
-    report.text("Not in this report for a robot with drive trains: the plant FMU, the closed loop through it, the "
-                "sweep and the identification (they take rigid arms so far).")
+    report.text("Not in this report for a robot with drive trains: the plant FMU and the closed loop through it, a "
+                "robustness sweep (both take drive trains: `manip export-fmu`, `manip sweep` with "
+                "`controller = \"cascade\"`) and the identification (it takes rigid arms so far).")
     progress.step("writing the report")
     md, html = report.write(out)
     files += [md, html]

@@ -233,10 +233,3 @@ def test_an_elastic_gear_needs_a_rotor():
     with pytest.raises(RobotDescriptionError, match="motor_inertia.*rotor inertia > 0"):
         description_from_dict({"name": "bad", "links": [link]}, "bad.toml")
 
-
-def test_the_compiled_sweep_loop_refuses_drive_trains():
-    from closed_loop.kernel import ClosedLoopKernel
-    from model.errors import InputError
-
-    with pytest.raises(InputError, match="rigid drive trains only"):
-        ClosedLoopKernel(load_robot("manutec_r3"), "pd")
