@@ -27,6 +27,8 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
+from model.errors import InputError
+
 __all__ = ["RETRIES", "LocalPool", "local_pool"]
 
 #: How many times a task whose worker died is run again.
@@ -121,7 +123,7 @@ class LocalPool:
 def local_pool(workers: int) -> Iterator[LocalPool]:
     """A :class:`LocalPool` of ``workers`` processes (this process alone for 1), stopped on exit."""
     if workers < 1:
-        raise ValueError(f"workers: expected >= 1, got {workers}")
+        raise InputError(f"expected a number of processes >= 1, got {workers!r}", parameter="workers")
     pool = LocalPool(workers)
     try:
         yield pool

@@ -2,7 +2,7 @@
 
 :func:`point_call` wraps Function ``name`` of a :class:`~model.codegen.CompiledLibrary` in a
 ``PointCall`` of the small CPython extension ``model/c/point_call.c`` (compiled here on first use
-and cached like the libraries, under the hash of its source, the Python ABI, NumPy and the
+and cached in the ``point-call`` folder of the libraries' cache, under the hash of its source, the Python ABI, NumPy and the
 compiler). A ``PointCall`` takes the joint vectors (each a 1-D float64 array or a list/tuple of n
 numbers), copies them into its buffers, evaluates with the fixed inputs it was made with (the
 parameter vector) and returns a fresh array, or None whenever the checked path must decide (another
@@ -67,7 +67,7 @@ def extension() -> Any:
     with _lock:
         if "module" not in _state:
             try:
-                path = _build(cache_dir())
+                path = _build(cache_dir() / "point-call")  # apart from the libraries
                 loader = importlib.machinery.ExtensionFileLoader("_mw_point_call", str(path))
                 spec = importlib.util.spec_from_file_location("_mw_point_call", str(path), loader=loader)
                 assert spec is not None
