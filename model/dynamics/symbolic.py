@@ -6,8 +6,10 @@ the parameter vector of :mod:`model.dynamics.parameters`. The compiled set
 size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T solve of
 ``accel``), never like the n^4 of the expanded Lagrange model:
 
-* ``inertia(q, p) -> B``: column j is ``rne(q, 0, e_j)`` without gravity and
-  friction; the lower triangle is formed and mirrored, so B is exactly symmetric.
+* ``inertia(q, p) -> B``: by the composite-rigid-body algorithm (:mod:`model.dynamics.crba`,
+  reflected motors) or from the columns ``rne(q, 0, e_j)`` without gravity and friction (lower
+  triangle mirrored), whichever has fewer operations (:attr:`DynamicsFunctions.formulations`
+  says which); B is exactly symmetric either way, and ``coriolis`` and ``accel`` use the same B.
 * ``coriolis(q, qd, p) -> C``: ``C = 1/2 (Bdot + J - J^T)`` with
   ``J = d(B(q) v)/dq`` at ``v = qd``, ``B(q) v = rne(q, 0, v)`` (one pass, no
   gravity, no friction) and ``Bdot = dB/dq . qd``; both forward-mode
@@ -36,6 +38,7 @@ from ..description import RobotDescription
 from .lagrange import lagrange_model
 from .linalg import ldl_solve_sx
 from .motors import check_motor_model, friction_sx, viscous_friction_sx
+from .crba import crba_sx
 from .newton_euler import rne_sx
 from .parameters import SymbolicParameters, parameter_layout, split_parameters
 
@@ -82,6 +85,8 @@ class DynamicsFunctions:
     accel: ca.Function
     description: RobotDescription = field(repr=False, compare=False)
     motor_model: str = "reflected"
+    #: How B(q) was formed, with the operation counts the choice was made on (one line for ``manip build``).
+    formulations: str = field(default="", compare=False)
 
     @cached_property
     def lagrange(self) -> LagrangeFunctions:
@@ -197,6 +202,18 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
     tau_ne = rne_sx(desc, motor_model, q, qd, qdd, params)
     B_cols = _inertia_columns_ne(desc, motor_model, q, params)
     B = ca.tril(B_cols) + ca.tril(B_cols, False).T  # the lower triangle, mirrored: exactly symmetric
+    ops_ne = ca.Function("B_ne", [q, p], [ca.densify(ca.cse(B))]).n_instructions()
+    formulations = f"inertia: Newton-Euler columns ({ops_ne:,} operations)"
+    if motor_model == "reflected":  # CRBA carries rotors as G^2 Jm only; the full model's rotors are NE's
+        B_crba = crba_sx(desc, q, params)
+        ops_crba = ca.Function("B_crba", [q, p], [ca.densify(ca.cse(B_crba))]).n_instructions()
+        if ops_crba < ops_ne:
+            B = B_cols = B_crba
+            formulations = (f"inertia: composite-rigid-body ({ops_crba:,} operations, Newton-Euler columns "
+                            f"{ops_ne:,}); accel and coriolis from it")
+        else:
+            formulations = (f"inertia: Newton-Euler columns ({ops_ne:,} operations, composite-rigid-body "
+                            f"{ops_crba:,})")
     qdd_ne = _accel_sx(desc, motor_model, s, B_cols=B_cols)
     g = rne_sx(desc, motor_model, q, zero, zero, params, with_friction=False)
     C = coriolis_ne_sx(desc, motor_model, q, qd, params, B)
@@ -212,6 +229,7 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
         accel=ca.Function("accel", [q, qd, tau, p], [d(ca.cse(qdd_ne))], ["q", "qd", "tau", "p"], ["qdd"]),
         description=desc,
         motor_model=motor_model,
+        formulations=formulations,
     )
 
 

@@ -1,0 +1,102 @@
+"""The composite-rigid-body inertia (model/dynamics/crba.py) and its choice in the compiled set.
+
+References: Pinocchio's ``crba`` (written independently; tolerance 1e-10 relative to max(1, |B|):
+both sides are exact algorithms in double precision, measured to agree to ~1e-15), the Newton-Euler
+columns B was formed from before (``_inertia_columns_ne``, 1e-12 relative: the issue's bound for
+"numbers unchanged"), and physical invariants (symmetry, exactly; positive definiteness).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin  # a mandatory reference: a missing Pinocchio fails, never skips
+import pytest
+
+from model import InertiaConsistencyWarning, load_description, load_robot
+from model.dynamics.crba import crba_sx
+from model.dynamics.symbolic import _inertia_columns_ne, _Symbols
+from tests.support.chains import random_chain
+from tests.support.references import pinocchio_model, random_payload_parameters, symmetric_from_upper
+
+CASES = ["puma560", "ur5", "panda", "scara", "chain9"]
+
+
+def _desc(name):
+    if name.startswith("chain"):
+        return random_chain(int(name[5:]), seed=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        return load_description(name)
+
+
+def _close(actual, expected, rtol):
+    np.testing.assert_allclose(actual, expected, rtol=0, atol=rtol * max(1.0, float(np.abs(expected).max())))
+
+
+@pytest.fixture(scope="module", params=CASES)
+def functions(request):
+    desc = _desc(request.param)
+    s = _Symbols(desc)
+    crba = ca.Function("crba", [s.q, s.p], [crba_sx(desc, s.q, s.params)])
+    cols = _inertia_columns_ne(desc, "reflected", s.q, s.params)
+    ne = ca.Function("ne", [s.q, s.p], [ca.tril(cols) + ca.tril(cols, False).T])
+    return desc, crba, ne
+
+
+def test_crba_equals_pinocchio_and_the_newton_euler_columns(functions):
+    desc, crba, ne = functions
+    model = pinocchio_model(desc)
+    data = model.createData()
+    rng = np.random.default_rng(41)
+    for _ in range(10):  # with a random payload: symmetric, positive definite, the NE columns' B
+        q = rng.uniform(-3.0, 3.0, desc.n)
+        p = random_payload_parameters(desc, rng)
+        B = np.array(crba(q, p))
+        np.testing.assert_array_equal(B, B.T)
+        assert np.linalg.eigvalsh(B).min() > 0
+        _close(B, np.array(ne(q, p)), 1e-12)
+    for _ in range(5):  # Pinocchio without payload (the model it is given has none)
+        q = rng.uniform(-3.0, 3.0, desc.n)
+        B = np.array(crba(q, _default_p(desc)))
+        _close(B, symmetric_from_upper(pin.crba(model, data, q)), 1e-10)
+
+
+def _default_p(desc):
+    from model.dynamics import DynamicsParameters, parameter_layout
+
+    return DynamicsParameters.defaults(parameter_layout(desc)).vector
+
+
+def test_a_wrong_inertia_is_caught(functions):
+    """Negative control: one body's inertia changed by 1 % moves B beyond the tolerance."""
+    import dataclasses
+
+    desc, crba, _ = functions
+    links = list(desc.links)
+    links[-1] = dataclasses.replace(links[-1], mass=links[-1].mass * 1.01)
+    other = dataclasses.replace(desc, links=tuple(links))
+    s = _Symbols(other)
+    wrong = ca.Function("w", [s.q, s.p], [crba_sx(other, s.q, s.params)])
+    q = np.full(desc.n, 0.4)
+    p = _default_p(desc)
+    assert np.abs(np.array(wrong(q, p)) - np.array(crba(q, p))).max() > 1e-8
+
+
+@pytest.mark.parametrize("name", ["puma560", "panda"])
+def test_the_compiled_set_takes_the_smaller_formulation_and_says_so(name):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        robot = load_robot(name)
+        full = load_robot(name, motor_model="full")
+    f = robot.dynamics.functions
+    assert f.formulations.startswith("inertia: composite-rigid-body")
+    assert full.dynamics.functions.formulations.startswith("inertia: Newton-Euler columns")
+    rng = np.random.default_rng(42)
+    q, qd = rng.uniform(-2.0, 2.0, (2, robot.n))
+    p = robot.parameters.vector
+    lag = f.lagrange  # the independent Lagrange model: B and C (Christoffel), 1e-12
+    _close(np.array(f.inertia(q, p)), np.array(lag.inertia_lagrange(q, p)), 1e-12)
+    _close(np.array(f.coriolis(q, qd, p)), np.array(lag.coriolis_lagrange(q, qd, p)), 1e-12)
