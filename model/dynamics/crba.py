@@ -30,7 +30,7 @@ from ..description import RobotDescription
 from ..kinematics import joint_motion
 from .parameters import SymbolicParameters, inertia_matrix_sx
 
-__all__ = ["crba_sx"]
+__all__ = ["crba_sx", "crba_world_sx", "world_bodies"]
 
 
 def _skew(v: Any) -> ca.SX:
@@ -87,4 +87,53 @@ def crba_sx(desc: RobotDescription, q: ca.SX, params: SymbolicParameters) -> ca.
             L = R @ L
             H = R @ H + ca.cross(p, L)
             B[i][j] = B[j][i] = axes[i].T @ (H if chain.revolute[i] else L)
+    return ca.vertcat(*[ca.horzcat(*row) for row in B])
+
+
+def world_bodies(desc: RobotDescription, q: ca.SX, params: SymbolicParameters) -> tuple[list, list, list]:
+    """Per body, in frame-0 axes about the frame-0 origin: motion subspace ``S_i = (u_i; o_i x u_i)``
+    (revolute) or ``(0; u_i)`` (prismatic), and spatial inertia ``(m, h, I_o)`` (payload on body n);
+    also the poses ``T_0i``."""
+    n = desc.n
+    chain = build_chain(desc)
+    T = ca.SX.eye(4)
+    S, bodies, poses = [], [], []
+    R_tip, t_tip = ca.DM(chain.tip[:3, :3]), ca.DM(chain.tip[:3, 3])
+    for i in range(n):
+        T = T @ (ca.DM(chain.placements[i]) @ joint_motion(chain.axes[i], q[i], chain.revolute[i]))
+        R, o = T[0:3, 0:3], T[0:3, 3]
+        u = R @ ca.DM(chain.axes[i])
+        S.append(ca.vertcat(u, ca.cross(o, u)) if chain.revolute[i] else ca.vertcat(ca.SX.zeros(3, 1), u))
+        parts = [(chain.mass[i], ca.DM(chain.com[i]), ca.DM(chain.inertia[i]))]
+        if i == n - 1:
+            parts.append((params.payload_mass, R_tip @ params.payload_com + t_tip,
+                          R_tip @ inertia_matrix_sx(params.payload_inertia) @ R_tip.T))
+        m_sum, h_sum, I_sum = 0, ca.SX.zeros(3, 1), ca.SX.zeros(3, 3)
+        for m, c, I_c in parts:
+            mb, hb, Ib = _about_origin(m, o + R @ c, R @ I_c @ R.T)
+            m_sum, h_sum, I_sum = m_sum + mb, h_sum + hb, I_sum + Ib
+        bodies.append((m_sum, h_sum, I_sum))
+        poses.append(T)
+    return S, bodies, poses
+
+
+def crba_world_sx(desc: RobotDescription, q: ca.SX, params: SymbolicParameters) -> ca.SX:
+    """(n, n) B(q) of the reflected motor model by the composite-rigid-body algorithm in frame-0 coordinates.
+
+    As :func:`crba_sx`, with every quantity in frame 0 about its origin: composites are plain sums and
+    ``B_ij = S_i . (K_j S_j)``, so moving a momentum inward costs nothing (the O(n^2) part is dot products).
+    """
+    n = desc.n
+    G = np.array([lk.gear_ratio for lk in desc.links])
+    Jm = np.array([lk.motor_inertia for lk in desc.links])
+    S, bodies, _ = world_bodies(desc, q, params)
+    B = [[None] * n for _ in range(n)]
+    m, h, I = 0, ca.SX.zeros(3, 1), ca.SX.zeros(3, 3)
+    for j in reversed(range(n)):
+        mb, hb, Ib = bodies[j]
+        m, h, I = m + mb, h + hb, I + Ib
+        w, v = S[j][0:3], S[j][3:6]
+        F = ca.vertcat(I @ w + ca.cross(h, v), m * v - ca.cross(h, w))
+        for i in range(j + 1):
+            B[i][j] = B[j][i] = S[i].T @ F + (G[j] * G[j] * Jm[j] if i == j else 0)
     return ca.vertcat(*[ca.horzcat(*row) for row in B])

@@ -2,15 +2,17 @@
 
 Every Function takes dense column vectors and returns dense outputs; ``p`` is
 the parameter vector of :mod:`model.dynamics.parameters`. The compiled set
-(:data:`COMPILED_FUNCTIONS`) is built from Newton-Euler passes only, so its
-size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T solve of
-``accel``), never like the n^4 of the expanded Lagrange model:
+(:data:`COMPILED_FUNCTIONS`) is built from recursive algorithms only (Newton-Euler, the
+composite-rigid-body algorithm, a recursive Coriolis matrix), each Function from the formulation
+of fewest operations, so its size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T
+solve of ``accel``), never like the n^4 of the expanded Lagrange model:
 
 * ``inertia(q, p) -> B``: by the composite-rigid-body algorithm (:mod:`model.dynamics.crba`,
-  reflected motors) or from the columns ``rne(q, 0, e_j)`` without gravity and friction (lower
-  triangle mirrored), whichever has fewer operations (:attr:`DynamicsFunctions.formulations`
+  reflected motors, in body frames or in frame 0) or from the columns ``rne(q, 0, e_j)``
+  without gravity and friction (lower triangle mirrored), whichever has fewer operations (:attr:`DynamicsFunctions.formulations`
   says which); B is exactly symmetric either way, and ``coriolis`` and ``accel`` use the same B.
-* ``coriolis(q, qd, p) -> C``: ``C = 1/2 (Bdot + J - J^T)`` with
+* ``coriolis(q, qd, p) -> C``: the recursion of :mod:`model.dynamics.coriolis_recursive` in frame 0
+  (reflected motors) or ``C = 1/2 (Bdot + J - J^T)``, whichever has fewer operations, the latter with
   ``J = d(B(q) v)/dq`` at ``v = qd``, ``B(q) v = rne(q, 0, v)`` (one pass, no
   gravity, no friction) and ``Bdot = dB/dq . qd``; both forward-mode
   derivatives (see ``docs/model-equations.md``). This is the Christoffel C.
@@ -38,7 +40,8 @@ from ..description import RobotDescription
 from .lagrange import lagrange_model
 from .linalg import ldl_solve_sx
 from .motors import check_motor_model, friction_sx, viscous_friction_sx
-from .crba import crba_sx
+from .coriolis_recursive import coriolis_world_sx
+from .crba import crba_sx, crba_world_sx
 from .newton_euler import rne_sx
 from .parameters import SymbolicParameters, parameter_layout, split_parameters
 
@@ -192,6 +195,15 @@ def coriolis_ne_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX
     return 0.5 * (Bdot + J - J.T)
 
 
+def _smallest(candidates: dict[str, ca.SX], inputs: list[ca.SX]) -> tuple[str, ca.SX, str]:
+    """The candidate expression of fewest operations (after CSE): its name, itself, and a line giving every count."""
+    ops = {k: int(ca.Function("candidate", inputs, [ca.densify(ca.cse(e))]).n_instructions())
+           for k, e in candidates.items()}
+    best = min(ops, key=lambda k: (ops[k], list(ops).index(k)))
+    others = ", ".join(f"{k} {v:,}" for k, v in ops.items() if k != best)
+    return best, candidates[best], f"{best} ({ops[best]:,} operations{'; ' + others if others else ''})"
+
+
 def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> DynamicsFunctions:
     """Build the dynamics Functions of ``desc`` (link inertial data baked in as constants)."""
     check_motor_model(motor_model)
@@ -202,21 +214,21 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
     tau_ne = rne_sx(desc, motor_model, q, qd, qdd, params)
     B_cols = _inertia_columns_ne(desc, motor_model, q, params)
     B = ca.tril(B_cols) + ca.tril(B_cols, False).T  # the lower triangle, mirrored: exactly symmetric
-    ops_ne = ca.Function("B_ne", [q, p], [ca.densify(ca.cse(B))]).n_instructions()
-    formulations = f"inertia: Newton-Euler columns ({ops_ne:,} operations)"
-    if motor_model == "reflected":  # CRBA carries rotors as G^2 Jm only; the full model's rotors are NE's
-        B_crba = crba_sx(desc, q, params)
-        ops_crba = ca.Function("B_crba", [q, p], [ca.densify(ca.cse(B_crba))]).n_instructions()
-        if ops_crba < ops_ne:
-            B = B_cols = B_crba
-            formulations = (f"inertia: composite-rigid-body ({ops_crba:,} operations, Newton-Euler columns "
-                            f"{ops_ne:,}); accel and coriolis from it")
-        else:
-            formulations = (f"inertia: Newton-Euler columns ({ops_ne:,} operations, composite-rigid-body "
-                            f"{ops_crba:,})")
+    reflected = motor_model == "reflected"  # CRBA and the recursive C carry rotors as G^2 Jm only
+    candidates = {"Newton-Euler columns": B}
+    if reflected:
+        candidates["composite-rigid-body"] = crba_sx(desc, q, params)
+        candidates["composite-rigid-body in frame 0"] = crba_world_sx(desc, q, params)
+    name_B, B, said_B = _smallest(candidates, [q, p])
+    if name_B != "Newton-Euler columns":
+        B_cols = B
     qdd_ne = _accel_sx(desc, motor_model, s, B_cols=B_cols)
     g = rne_sx(desc, motor_model, q, zero, zero, params, with_friction=False)
-    C = coriolis_ne_sx(desc, motor_model, q, qd, params, B)
+    candidates = {"1/2 (Bdot + J - J^T)": coriolis_ne_sx(desc, motor_model, q, qd, params, B)}
+    if reflected:
+        candidates["recursive in frame 0"] = coriolis_world_sx(desc, q, qd, params)
+    _, C, said_C = _smallest(candidates, [q, qd, p])
+    formulations = f"inertia: {said_B} (accel uses it); coriolis: {said_C}"
     F = s.friction(qd)
 
     d = ca.densify

@@ -1,9 +1,11 @@
-"""The composite-rigid-body inertia (model/dynamics/crba.py) and its choice in the compiled set.
+"""The composite-rigid-body inertia (model/dynamics/crba.py), the recursive Coriolis matrix
+(model/dynamics/coriolis_recursive.py) and their choice in the compiled set.
 
 References: Pinocchio's ``crba`` (written independently; tolerance 1e-10 relative to max(1, |B|):
 both sides are exact algorithms in double precision, measured to agree to ~1e-15), the Newton-Euler
 columns B was formed from before (``_inertia_columns_ne``, 1e-12 relative: the issue's bound for
-"numbers unchanged"), and physical invariants (symmetry, exactly; positive definiteness).
+"numbers unchanged"; the same for C against ``1/2 (Bdot + J - J^T)`` and Pinocchio's
+``computeCoriolisMatrix``), and physical invariants (symmetry, exactly; positive definiteness).
 """
 
 from __future__ import annotations
@@ -16,8 +18,9 @@ import pinocchio as pin  # a mandatory reference: a missing Pinocchio fails, nev
 import pytest
 
 from model import InertiaConsistencyWarning, load_description, load_robot
-from model.dynamics.crba import crba_sx
-from model.dynamics.symbolic import _inertia_columns_ne, _Symbols
+from model.dynamics.coriolis_recursive import coriolis_recursive_sx, coriolis_world_sx
+from model.dynamics.crba import crba_sx, crba_world_sx
+from model.dynamics.symbolic import _inertia_columns_ne, _Symbols, coriolis_ne_sx
 from tests.support.chains import random_chain
 from tests.support.references import pinocchio_model, random_payload_parameters, symmetric_from_upper
 
@@ -42,12 +45,14 @@ def functions(request):
     s = _Symbols(desc)
     crba = ca.Function("crba", [s.q, s.p], [crba_sx(desc, s.q, s.params)])
     cols = _inertia_columns_ne(desc, "reflected", s.q, s.params)
-    ne = ca.Function("ne", [s.q, s.p], [ca.tril(cols) + ca.tril(cols, False).T])
-    return desc, crba, ne
+    B_ne = ca.tril(cols) + ca.tril(cols, False).T
+    ne = ca.Function("ne", [s.q, s.p], [B_ne])
+    return desc, crba, ne, s, B_ne
 
 
 def test_crba_equals_pinocchio_and_the_newton_euler_columns(functions):
-    desc, crba, ne = functions
+    desc, crba, ne, s, _ = functions
+    world = ca.Function("world", [s.q, s.p], [crba_world_sx(desc, s.q, s.params)])
     model = pinocchio_model(desc)
     data = model.createData()
     rng = np.random.default_rng(41)
@@ -58,10 +63,33 @@ def test_crba_equals_pinocchio_and_the_newton_euler_columns(functions):
         np.testing.assert_array_equal(B, B.T)
         assert np.linalg.eigvalsh(B).min() > 0
         _close(B, np.array(ne(q, p)), 1e-12)
+        Bw = np.array(world(q, p))
+        np.testing.assert_array_equal(Bw, Bw.T)
+        _close(Bw, np.array(ne(q, p)), 1e-12)
     for _ in range(5):  # Pinocchio without payload (the model it is given has none)
         q = rng.uniform(-3.0, 3.0, desc.n)
         B = np.array(crba(q, _default_p(desc)))
         _close(B, symmetric_from_upper(pin.crba(model, data, q)), 1e-10)
+
+
+def test_recursive_coriolis_equals_the_christoffel_formula_and_pinocchio(functions):
+    desc, _, _, s, B_ne = functions
+    body = ca.Function("body", [s.q, s.qd, s.p], [coriolis_recursive_sx(desc, s.q, s.qd, s.params)])
+    world = ca.Function("world", [s.q, s.qd, s.p], [coriolis_world_sx(desc, s.q, s.qd, s.params)])
+    christoffel = ca.Function("c", [s.q, s.qd, s.p], [coriolis_ne_sx(desc, "reflected", s.q, s.qd, s.params, B_ne)])
+    model = pinocchio_model(desc)
+    data = model.createData()
+    rng = np.random.default_rng(43)
+    for _ in range(8):
+        q, qd = rng.uniform(-3.0, 3.0, (2, desc.n))
+        p = random_payload_parameters(desc, rng)
+        expected = np.array(christoffel(q, qd, p))
+        _close(np.array(body(q, qd, p)), expected, 1e-12)
+        _close(np.array(world(q, qd, p)), expected, 1e-12)
+        p0 = _default_p(desc)
+        _close(np.array(world(q, qd, p0)), pin.computeCoriolisMatrix(model, data, q, qd), 1e-10)
+    # negative control: C^T in place of C (equal only where C is symmetric) is caught
+    assert np.abs(np.array(world(q, qd, p)).T - expected).max() > 1e-6
 
 
 def _default_p(desc):
@@ -74,7 +102,7 @@ def test_a_wrong_inertia_is_caught(functions):
     """Negative control: one body's inertia changed by 1 % moves B beyond the tolerance."""
     import dataclasses
 
-    desc, crba, _ = functions
+    desc, crba, *_ = functions
     links = list(desc.links)
     links[-1] = dataclasses.replace(links[-1], mass=links[-1].mass * 1.01)
     other = dataclasses.replace(desc, links=tuple(links))
@@ -92,11 +120,29 @@ def test_the_compiled_set_takes_the_smaller_formulation_and_says_so(name):
         robot = load_robot(name)
         full = load_robot(name, motor_model="full")
     f = robot.dynamics.functions
-    assert f.formulations.startswith("inertia: composite-rigid-body")
-    assert full.dynamics.functions.formulations.startswith("inertia: Newton-Euler columns")
+    assert f.formulations.startswith("inertia: composite-rigid-body (")  # the fewest operations on these arms
+    assert "coriolis: 1/2 (Bdot + J - J^T) (" in f.formulations
+    said = full.dynamics.functions.formulations  # rotors as bodies: the Newton-Euler forms only
+    assert said.startswith("inertia: Newton-Euler columns (") and "frame 0" not in said
     rng = np.random.default_rng(42)
     q, qd = rng.uniform(-2.0, 2.0, (2, robot.n))
     p = robot.parameters.vector
     lag = f.lagrange  # the independent Lagrange model: B and C (Christoffel), 1e-12
     _close(np.array(f.inertia(q, p)), np.array(lag.inertia_lagrange(q, p)), 1e-12)
     _close(np.array(f.coriolis(q, qd, p)), np.array(lag.coriolis_lagrange(q, qd, p)), 1e-12)
+
+
+def test_a_long_chain_takes_the_frame_0_forms():
+    from model.dynamics import build_functions
+
+    desc = random_chain(16, seed=2)
+    f = build_functions(desc)
+    assert f.formulations.startswith("inertia: composite-rigid-body in frame 0 (")
+    assert "coriolis: recursive in frame 0 (" in f.formulations
+    model = pinocchio_model(desc)
+    data = model.createData()
+    rng = np.random.default_rng(44)
+    q, qd = rng.uniform(-2.0, 2.0, (2, desc.n))
+    p = _default_p(desc)
+    _close(np.array(f.inertia(q, p)), symmetric_from_upper(pin.crba(model, data, q)), 1e-10)
+    _close(np.array(f.coriolis(q, qd, p)), pin.computeCoriolisMatrix(model, data, q, qd), 1e-10)
