@@ -19,7 +19,9 @@ solve of ``accel``), never like the n^4 of the expanded Lagrange model:
 * ``gravload(q, p) -> g``: ``rne(q, 0, 0)`` without friction.
 * ``friction(qd, p) -> F``
 * ``rne(q, qd, qdd, p) -> tau``: ``B qdd + C qd + g + F`` by Newton-Euler.
-* ``accel(q, qd, tau, p) -> qdd``: ``B^-1 (tau - rne(q, qd, 0))`` by an LDL^T solve.
+* ``accel(q, qd, tau, p) -> qdd``: ``B^-1 (tau - rne(q, qd, 0))`` by an LDL^T solve of the chosen B,
+  or by the articulated-body algorithm in frame 0 (:mod:`model.dynamics.aba`, reflected motors),
+  whichever has fewer operations.
 
 The Lagrange model stays available as the independent check, built on first
 access only (its size grows like n^4): ``inertia_lagrange``,
@@ -40,6 +42,7 @@ from ..description import RobotDescription
 from .lagrange import lagrange_model
 from .linalg import ldl_solve_sx
 from .motors import check_motor_model, friction_sx, viscous_friction_sx
+from .aba import aba_world_sx
 from .coriolis_recursive import coriolis_world_sx
 from .crba import crba_sx, crba_world_sx
 from .newton_euler import rne_sx
@@ -222,13 +225,16 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
     name_B, B, said_B = _smallest(candidates, [q, p])
     if name_B != "Newton-Euler columns":
         B_cols = B
-    qdd_ne = _accel_sx(desc, motor_model, s, B_cols=B_cols)
+    candidates = {"LDL^T of B": _accel_sx(desc, motor_model, s, B_cols=B_cols)}
+    if reflected:
+        candidates["articulated-body in frame 0"] = aba_world_sx(desc, q, qd, tau - s.friction(qd), params)
+    _, qdd_ne, said_A = _smallest(candidates, [q, qd, tau, p])
     g = rne_sx(desc, motor_model, q, zero, zero, params, with_friction=False)
     candidates = {"1/2 (Bdot + J - J^T)": coriolis_ne_sx(desc, motor_model, q, qd, params, B)}
     if reflected:
         candidates["recursive in frame 0"] = coriolis_world_sx(desc, q, qd, params)
     _, C, said_C = _smallest(candidates, [q, qd, p])
-    formulations = f"inertia: {said_B} (accel uses it); coriolis: {said_C}"
+    formulations = f"inertia: {said_B}; accel: {said_A}; coriolis: {said_C}"
     F = s.friction(qd)
 
     d = ca.densify

@@ -22,7 +22,7 @@ from model.dynamics.coriolis_recursive import coriolis_recursive_sx, coriolis_wo
 from model.dynamics.crba import crba_sx, crba_world_sx
 from model.dynamics.symbolic import _inertia_columns_ne, _Symbols, coriolis_ne_sx
 from tests.support.chains import random_chain
-from tests.support.references import pinocchio_model, random_payload_parameters, symmetric_from_upper
+from tests.support.references import friction_reference, pinocchio_model, random_payload_parameters, symmetric_from_upper
 
 CASES = ["puma560", "ur5", "panda", "scara", "chain9"]
 
@@ -92,6 +92,27 @@ def test_recursive_coriolis_equals_the_christoffel_formula_and_pinocchio(functio
     assert np.abs(np.array(world(q, qd, p)).T - expected).max() > 1e-6
 
 
+def test_aba_equals_the_ldl_solve_and_pinocchio(functions):
+    from model.dynamics.aba import aba_world_sx
+    from model.dynamics.symbolic import _accel_sx
+
+    desc, _, _, s, _ = functions
+    aba = ca.Function("aba", [s.q, s.qd, s.tau, s.p], [aba_world_sx(desc, s.q, s.qd, s.tau - s.friction(s.qd), s.params)])
+    ldl = ca.Function("ldl", [s.q, s.qd, s.tau, s.p], [_accel_sx(desc, "reflected", s)])
+    model = pinocchio_model(desc)
+    data = model.createData()
+    rng = np.random.default_rng(45)
+    for _ in range(8):
+        q, qd, tau = rng.uniform(-2.0, 2.0, (3, desc.n))
+        p = random_payload_parameters(desc, rng)
+        _close(np.array(aba(q, qd, tau, p)).ravel(), np.array(ldl(q, qd, tau, p)).ravel(), 1e-12)
+        p0 = _default_p(desc)
+        F = friction_reference(desc, qd)
+        _close(np.array(aba(q, qd, tau, p0)).ravel(), pin.aba(model, data, q, qd, tau - F), 1e-10)
+    # negative control: the payload enters (left out, the accelerations differ well beyond the tolerance)
+    assert np.abs(np.array(aba(q, qd, tau, p)) - np.array(aba(q, qd, tau, p0))).max() > 1e-6
+
+
 def _default_p(desc):
     from model.dynamics import DynamicsParameters, parameter_layout
 
@@ -146,3 +167,6 @@ def test_a_long_chain_takes_the_frame_0_forms():
     p = _default_p(desc)
     _close(np.array(f.inertia(q, p)), symmetric_from_upper(pin.crba(model, data, q)), 1e-10)
     _close(np.array(f.coriolis(q, qd, p)), pin.computeCoriolisMatrix(model, data, q, qd), 1e-10)
+    tau = rng.uniform(-2.0, 2.0, desc.n)
+    F = friction_reference(desc, qd)
+    _close(np.array(f.accel(q, qd, tau, p)).ravel(), pin.aba(model, data, q, qd, tau - F), 1e-10)
