@@ -37,10 +37,27 @@ def _skew(v: Any) -> ca.SX:
     return ca.vertcat(ca.horzcat(0, -v[2], v[1]), ca.horzcat(v[2], 0, -v[0]), ca.horzcat(-v[1], v[0], 0))
 
 
+def _symmetric(entry: Any) -> ca.SX:
+    """The symmetric 3x3 matrix of ``entry(a, b)`` for a <= b: each off-diagonal value formed once, so that
+    sums of such matrices stay one expression per pair (CSE cannot see that two orderings are equal)."""
+    rows = [[None] * 3 for _ in range(3)]
+    for a in range(3):
+        for b in range(a, 3):
+            rows[a][b] = rows[b][a] = entry(a, b)
+    return ca.vertcat(*[ca.horzcat(*r) for r in rows])
+
+
 def _about_origin(m: Any, c: Any, I_c: Any) -> tuple[Any, ca.SX, ca.SX]:
-    """``(m, h, I)`` of a body of mass m, COM c and inertia I_c about its COM (same axes), about the origin."""
-    S = _skew(c)
-    return m, m * c, I_c - m * (S @ S)
+    """``(m, h, I)`` of a body of mass m, COM c and inertia I_c about its COM (same axes), about the origin:
+    ``I = I_c + m (|c|^2 1 - c c^T)`` (= ``I_c - m [c]x [c]x``), formed symmetric."""
+    c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+    return m, m * c, _symmetric(lambda a, b: I_c[a, b] + m * ((c2 if a == b else 0) - c[a] * c[b]))
+
+
+def _rotated(R: Any, I: Any) -> ca.SX:
+    """``R I R^T`` of a symmetric I, formed symmetric."""
+    M = R @ I
+    return _symmetric(lambda a, b: M[a, 0] * R[b, 0] + M[a, 1] * R[b, 1] + M[a, 2] * R[b, 2])
 
 
 def crba_sx(desc: RobotDescription, q: ca.SX, params: SymbolicParameters) -> ca.SX:
@@ -69,7 +86,7 @@ def crba_sx(desc: RobotDescription, q: ca.SX, params: SymbolicParameters) -> ca.
         hr = R @ h
         P, Hr = _skew(p), _skew(hr)
         h_moved = hr + m * p
-        I_moved = R @ I @ R.T - Hr @ P - P @ Hr - m * (P @ P)
+        I_moved = _rotated(R, I) - _symmetric(lambda a, b: (Hr @ P)[a, b] + (Hr @ P)[b, a]) - m * (P @ P)
         mb, hb, Ib = bodies[i - 1]
         composite[i - 1] = (mb + m, hb + h_moved, Ib + I_moved)
 
@@ -110,7 +127,7 @@ def world_bodies(desc: RobotDescription, q: ca.SX, params: SymbolicParameters) -
                           R_tip @ inertia_matrix_sx(params.payload_inertia) @ R_tip.T))
         m_sum, h_sum, I_sum = 0, ca.SX.zeros(3, 1), ca.SX.zeros(3, 3)
         for m, c, I_c in parts:
-            mb, hb, Ib = _about_origin(m, o + R @ c, R @ I_c @ R.T)
+            mb, hb, Ib = _about_origin(m, o + R @ c, _rotated(R, I_c))
             m_sum, h_sum, I_sum = m_sum + mb, h_sum + hb, I_sum + Ib
         bodies.append((m_sum, h_sum, I_sum))
         poses.append(T)

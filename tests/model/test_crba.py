@@ -170,3 +170,12 @@ def test_a_long_chain_takes_the_frame_0_forms():
     tau = rng.uniform(-2.0, 2.0, desc.n)
     F = friction_reference(desc, qd)
     _close(np.array(f.accel(q, qd, tau, p)).ravel(), pin.aba(model, data, q, qd, tau - F), 1e-10)
+
+
+def test_manip_build_says_which_formulation(capsys, tmp_path, monkeypatch):
+    from workbench.cli import main
+
+    monkeypatch.setenv("MANIP_CACHE_DIR", str(tmp_path))
+    assert main(["build", "planar2r"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("planar2r: inertia: ")]
+    assert len(lines) == 1 and "; accel: " in lines[0] and "; coriolis: " in lines[0] and "operations" in lines[0]
