@@ -1,14 +1,16 @@
-"""Parameter sweeps: thousands of compiled closed loops on a Dask cluster, with their table and summary.
+"""Parameter sweeps: thousands of compiled closed loops in local processes or on Dask, with their table and summary.
 
 :func:`run_sweep` runs every case of a :class:`~closed_loop.sweep_spec.SweepSpec` with the
 compiled closed loop (:mod:`closed_loop.kernel`): the plant's payload, friction and
 link masses are kernel inputs, the control rate changes the schedule, a bandwidth or
 damping a design per case. Cases are grouped into tasks of a few hundred
-milliseconds and run by ``dask.distributed``: by default an embedded ``LocalCluster``
-of worker processes bound to 127.0.0.1 (one per core, one thread each: the kernel
-holds the GIL), or any existing cluster given by its scheduler address. The kernel
-is built once (before the workers start, into the disk cache that workers on this
-machine load; a remote worker builds it once into its own cache).
+milliseconds and run, by default, in a pool of processes forked from this one
+(:mod:`closed_loop.sweep_pool`: one per core, no socket, started in milliseconds; one worker
+runs in this process), or by ``dask.distributed``: an existing cluster given by its
+scheduler address, or an embedded ``LocalCluster`` listening on a ``host`` other than
+loopback. The kernel is built once, before any worker starts (forked workers inherit it,
+Dask workers on this machine load it from the disk cache; a remote worker builds it once
+into its own cache).
 
 Each finished task is written at once, atomically, to ``DIR/.sweep-parts/`` (its
 cases and metrics), so a worker killed mid-sweep costs only its unfinished tasks,
@@ -405,7 +407,7 @@ def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | 
           scheduler: str | None = None, host: str = "127.0.0.1", resume: bool = False,
           progress: Callable[[int], None] | None = None, stream: TextIO | None = None,
           plots: bool = True) -> SweepResult:
-    """Run every case of ``spec`` on Dask; write the table, summary and plots into ``out`` (if given).
+    """Run every case of ``spec`` (local processes or Dask); write the table, summary and plots into ``out`` (if given).
 
     Parameters
     ----------
@@ -414,11 +416,13 @@ def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | 
     out
         Output folder (created); None keeps the finished tasks in a temporary folder and writes nothing.
     workers
-        Worker processes of the embedded cluster (default: the machine's cores); ignored with ``scheduler``.
+        Worker processes on this machine (default: the machine's cores; 1 runs in this process); ignored with
+        ``scheduler``.
     scheduler
         Address of an existing Dask scheduler (``tcp://host:port``) instead of the embedded cluster.
     host
-        Interface the embedded cluster listens on (default loopback; anything else warns).
+        Loopback (the default): the local process pool. Another interface: an embedded Dask cluster listening
+        on it (warns).
     resume
         Keep the cases already written in ``out`` by an interrupted run of the same spec.
     progress
@@ -429,8 +433,6 @@ def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | 
     SweepResult
     """
     import tempfile
-
-    from distributed import as_completed
 
     t0 = time.perf_counter()
     stream = stream if stream is not None else sys.stderr
@@ -461,30 +463,10 @@ def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | 
         report = progress or SweepProgress(spec.n_cases, stream, done=len(done))
         run_time = 0.0
         if todo.size:
-            with (contextlib.nullcontext(_client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
-                try:
-                    if scheduler:
-                        n_workers = max(1, len(client.scheduler_info()["workers"]))
-                    size = _batch_size(spec, todo.size, n_workers)
-                    batches = [todo[i:i + size] for i in range(0, todo.size, size)]
-                    print(f"sweep: {spec.n_cases} cases ({len(done)} already done) in {len(batches)} tasks on "
-                          f"{n_workers} workers ({'scheduler ' + scheduler if scheduler else 'local cluster'})",
-                          file=stream, flush=True)
-                    t_run = time.perf_counter()
-                    spec_f = client.scatter(spec, broadcast=True)
-                    futures = {client.submit(run_cases, spec_f, b, pure=False, retries=2): b for b in batches}
-                    for fut in as_completed(futures):
-                        cases = futures[fut]
-                        rows = fut.result()
-                        _write_part(parts, cases, rows)
-                        for c, row in zip(cases, rows):
-                            done[int(c)] = row
-                        report(len(cases))
-                        fut.release()
-                    run_time = time.perf_counter() - t_run
-                finally:
-                    if scheduler:
-                        client.close()
+            if scheduler or host not in _LOOPBACK:
+                run_time, n_workers = _run_on_dask(spec, todo, done, parts, report, stream, n_workers, scheduler, host)
+            else:
+                run_time = _run_local(spec, todo, done, parts, report, stream, n_workers)
         table = assemble(spec, joints, done)
         if len(table) != spec.n_cases:  # pragma: no cover - every task either returned or raised
             raise ToolchainError(f"sweep: {len(table)} of {spec.n_cases} cases finished: the Dask cluster lost the others")
@@ -502,6 +484,65 @@ def run_sweep(spec: SweepSpec, out: str | Path | None = None, *, workers: int | 
     finally:
         if tmp is not None:
             tmp.cleanup()
+
+
+def _collect(spec: SweepSpec, finished: Iterator[tuple[np.ndarray, np.ndarray]], done: dict[int, np.ndarray],
+             parts: Path, report: Callable[[int], None]) -> None:
+    """Write each finished task's part at once and record its rows."""
+    for cases, rows in finished:
+        _write_part(parts, cases, rows)
+        for c, row in zip(cases, rows):
+            done[int(c)] = row
+        report(len(cases))
+
+
+def _run_local(spec: SweepSpec, todo: np.ndarray, done: dict[int, np.ndarray], parts: Path,
+               report: Callable[[int], None], stream: TextIO, n_workers: int) -> float:
+    """The cases of ``todo`` in this process (1 worker) or a forked pool (:mod:`closed_loop.sweep_pool`);
+    the run time, s."""
+    from .sweep_pool import local_pool
+
+    size = spec.batch or max(1, min(100, math.ceil(todo.size / (32 * n_workers))))
+    batches = [todo[i:i + size] for i in range(0, todo.size, size)]
+    where = "this process" if n_workers == 1 else "a local process pool"
+    print(f"sweep: {spec.n_cases} cases ({spec.n_cases - todo.size} already done) in {len(batches)} tasks on "
+          f"{n_workers} workers ({where})", file=stream, flush=True)
+    t_run = time.perf_counter()
+    with local_pool(n_workers) as pool:
+        _collect(spec, pool.run(run_cases, spec, batches), done, parts, report)
+    return time.perf_counter() - t_run
+
+
+def _run_on_dask(spec: SweepSpec, todo: np.ndarray, done: dict[int, np.ndarray], parts: Path,
+                 report: Callable[[int], None], stream: TextIO, n_workers: int, scheduler: str | None,
+                 host: str) -> tuple[float, int]:
+    """The cases of ``todo`` on the Dask scheduler at ``scheduler``, or on an embedded cluster listening on
+    ``host``; the run time, s, and the number of workers."""
+    from distributed import as_completed
+
+    with (contextlib.nullcontext(_client(scheduler)) if scheduler else local_cluster(n_workers, host)) as client:
+        try:
+            if scheduler:
+                n_workers = max(1, len(client.scheduler_info()["workers"]))
+            size = _batch_size(spec, todo.size, n_workers)
+            batches = [todo[i:i + size] for i in range(0, todo.size, size)]
+            print(f"sweep: {spec.n_cases} cases ({spec.n_cases - todo.size} already done) in {len(batches)} tasks on "
+                  f"{n_workers} workers ({'scheduler ' + scheduler if scheduler else 'local cluster'})",
+                  file=stream, flush=True)
+            t_run = time.perf_counter()
+            spec_f = client.scatter(spec, broadcast=True)
+            futures = {client.submit(run_cases, spec_f, b, pure=False, retries=2): b for b in batches}
+
+            def finished() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+                for fut in as_completed(futures):
+                    yield futures[fut], fut.result()
+                    fut.release()
+
+            _collect(spec, finished(), done, parts, report)
+            return time.perf_counter() - t_run, n_workers
+        finally:
+            if scheduler:
+                client.close()
 
 
 def _corners(spec: SweepSpec) -> list[dict[str, float]]:

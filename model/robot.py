@@ -19,6 +19,7 @@ from .arrays import as_joint_vector
 from .description import RobotDescription
 from .loading import load_description
 from .errors import InputError
+from .point_call import point_call
 
 if TYPE_CHECKING:  # pragma: no cover
     import control
@@ -31,6 +32,19 @@ if TYPE_CHECKING:  # pragma: no cover
     from .singularity import SingularityReport
 
 __all__ = ["Robot", "load_robot"]
+
+#: The single calls with a compiled fast path: library ("dynamics" or "kinematics"), joint arguments,
+#: and whether the output is a matrix (returned Fortran-ordered, as the checked path returns it).
+_FAST_CALLS: dict[str, tuple[str, int, bool]] = {
+    "fkine": ("kinematics", 1, True), "jacob0": ("kinematics", 1, True),
+    "inertia": ("dynamics", 1, True), "coriolis": ("dynamics", 2, True), "gravload": ("dynamics", 1, False),
+    "rne": ("dynamics", 3, False), "accel": ("dynamics", 3, False),
+}
+
+
+def _no_call(*args: Any) -> None:
+    """The stand-in where no compiled single call exists: every call takes the checked path."""
+    return None
 
 
 def _as_pose(T: Any) -> np.ndarray:
@@ -67,6 +81,7 @@ class Robot:
         self.description = description
         self.motor_model = motor_model
         self._parameters: "DynamicsParameters | None" = None  # None: the description's
+        self._calls: dict[str, Any] = {}  # compiled single calls with these parameters (see _call)
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, n={self.n}, joints={self.description.joint_types!r}, motor_model={self.motor_model!r})"
@@ -117,6 +132,22 @@ class Robot:
     def _q(self, q: Any, name: str = "q") -> np.ndarray:
         return as_joint_vector(q, self.n, name)
 
+    def _call(self, name: str) -> Any:
+        """The compiled single call of ``name`` (:mod:`model.point_call`) with this robot's parameters,
+        made on first use; :func:`_no_call` where there is none (no compiler, no Python headers).
+
+        It returns the checked path's numbers for arguments it accepts and None for every other
+        argument, which the method then hands to the checked path (same errors, same results)."""
+        kind, n_args, matrix = _FAST_CALLS[name]
+        if kind == "dynamics":
+            library, fixed = self.dynamics._backend(), (self.parameters.vector,)
+        else:
+            lazy = self.compiled_kinematics._lazy
+            library, fixed = lazy.library or lazy.backend(stacklevel=3), ()
+        call = point_call(library, name, n_args, self.n, fixed, matrix) or _no_call
+        self._calls[name] = call
+        return call
+
     # -------------------------------------------------------------- kinematics
     @cached_property
     def compiled_kinematics(self) -> "CompiledKinematics":
@@ -132,7 +163,8 @@ class Robot:
 
     def fkine(self, q: Any) -> np.ndarray:
         """(4, 4) pose ``T_WE`` of the tool frame in the world frame (base and tool included); q in rad / m."""
-        return self.compiled_kinematics.fkine(q)
+        out = (self._calls.get("fkine") or self._call("fkine"))(q)
+        return self.compiled_kinematics.fkine(q) if out is None else out
 
     def fkine_all(self, q: Any) -> np.ndarray:
         """(n+1, 4, 4) world poses of frame 0 (the base) and of every link frame (DH frame i for DH tables)."""
@@ -140,7 +172,8 @@ class Robot:
 
     def jacob0(self, q: Any) -> np.ndarray:
         """(6, n) geometric Jacobian of the tool origin, rows [v; w], world-frame axes (m/s and rad/s per joint rate)."""
-        return self.compiled_kinematics.jacob0(q)
+        out = (self._calls.get("jacob0") or self._call("jacob0"))(q)
+        return self.compiled_kinematics.jacob0(q) if out is None else out
 
     def jacobe(self, q: Any) -> np.ndarray:
         """(6, n) geometric Jacobian of the tool origin, rows [v; w], tool-frame axes."""
@@ -209,6 +242,7 @@ class Robot:
         other = Robot.__new__(Robot)
         other.__dict__.update(self.__dict__)  # description, motor model, kinematics and the same Dynamics
         other._parameters = p
+        other._calls = {}  # bound to the parameters
         return other
 
     @property
@@ -233,15 +267,27 @@ class Robot:
         ``p`` (every dynamics method): parameters to use instead of :attr:`parameters`; ``ws``: a
         :class:`~model.dynamics.Workspace` of ``self.dynamics`` for a hot loop.
         """
+        if p is None and ws is None:
+            out = (self._calls.get("inertia") or self._call("inertia"))(q)
+            if out is not None:
+                return out
         return self.dynamics.inertia(q, self._parameters if p is None else p, ws=ws)
 
     def coriolis(self, q: Any, qd: Any, p: "DynamicsParameters | None" = None, *,
                  ws: "Workspace | None" = None) -> np.ndarray:
         """(n, n) Coriolis/centrifugal matrix C(q, qd) from Christoffel symbols."""
+        if p is None and ws is None:
+            out = (self._calls.get("coriolis") or self._call("coriolis"))(q, qd)
+            if out is not None:
+                return out
         return self.dynamics.coriolis(q, qd, self._parameters if p is None else p, ws=ws)
 
     def gravload(self, q: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) gravity torque g(q): the joint torque that holds the arm still."""
+        if p is None and ws is None:
+            out = (self._calls.get("gravload") or self._call("gravload"))(q)
+            if out is not None:
+                return out
         return self.dynamics.gravload(q, self._parameters if p is None else p, ws=ws)
 
     def friction(self, qd: Any, p: "DynamicsParameters | None" = None, *, ws: "Workspace | None" = None) -> np.ndarray:
@@ -254,11 +300,19 @@ class Robot:
     def rne(self, q: Any, qd: Any, qdd: Any, p: "DynamicsParameters | None" = None, *,
             ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint torques for the motion (inverse dynamics), motor and friction terms included."""
+        if p is None and ws is None:
+            out = (self._calls.get("rne") or self._call("rne"))(q, qd, qdd)
+            if out is not None:
+                return out
         return self.dynamics.rne(q, qd, qdd, self._parameters if p is None else p, ws=ws)
 
     def accel(self, q: Any, qd: Any, tau: Any, p: "DynamicsParameters | None" = None, *,
               ws: "Workspace | None" = None) -> np.ndarray:
         """(n,) joint accelerations under joint torques ``tau`` (forward dynamics)."""
+        if p is None and ws is None:
+            out = (self._calls.get("accel") or self._call("accel"))(q, qd, tau)
+            if out is not None:
+                return out
         return self.dynamics.accel(q, qd, tau, self._parameters if p is None else p, ws=ws)
 
     def linearise(self, q0: Any, qd0: Any = None, u0: Any = None,

@@ -51,6 +51,7 @@ def _cmd_build(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot, motor_model=args.motor_model)
     info = robot.dynamics.compile(force=args.force, progress=lambda event: print(f"manip build: {event}", file=sys.stderr, flush=True))
     print(f"{robot.name} ({args.motor_model} motors): {format_build(info)}")
+    print(f"{robot.name}: {robot.dynamics.functions.formulations}")
     return 0
 
 

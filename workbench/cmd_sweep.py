@@ -1,9 +1,9 @@
-"""``manip sweep``: thousands of closed-loop runs over varied parameters, on Dask.
+"""``manip sweep``: thousands of closed-loop runs over varied parameters, in local processes or on Dask.
 
 ``manip sweep SPEC.toml --out DIR [--workers K] [--scheduler ADDRESS] [--listen HOST] [--resume] [--no-plots]``
 reads the spec (:mod:`closed_loop.sweep_spec`; refused in one line before any work),
-runs every case with the compiled closed loop on an embedded loopback Dask cluster
-(or the scheduler at ADDRESS) and writes ``DIR/results.csv``, ``DIR/results.parquet``,
+runs every case with the compiled closed loop in a local process pool (:mod:`closed_loop.sweep_pool`;
+an embedded Dask cluster for a ``--listen`` HOST other than loopback, or the Dask scheduler at ADDRESS) and writes ``DIR/results.csv``, ``DIR/results.parquet``,
 ``DIR/summary.json`` and the plots (:mod:`closed_loop.sweep`). Progress goes to stderr.
 """
 
@@ -57,11 +57,11 @@ def register(subparsers: Any, full: bool = True) -> None:
     p.add_argument("spec", help="sweep spec (TOML)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--workers", type=int, default=None, metavar="K",
-                   help="worker processes of the embedded cluster (default: the machine's cores)")
+                   help="worker processes on this machine (default: the machine's cores; 1: this process)")
     p.add_argument("--scheduler", type=scheduler_address, default=None, metavar="ADDRESS",
                    help="run on an existing Dask cluster (tcp://host:port) instead of an embedded one")
     p.add_argument("--listen", type=host_address, default="127.0.0.1", metavar="HOST",
-                   help="interface of the embedded cluster (default 127.0.0.1; another one is reachable from the "
-                        "network and warns)")
+                   help="with a HOST other than loopback, run an embedded Dask cluster listening on it (reachable "
+                        "from the network; warns) instead of the local process pool (default 127.0.0.1)")
     p.add_argument("--resume", action="store_true", help="keep the cases an interrupted run of this spec wrote in DIR")
     add_no_plots(p)

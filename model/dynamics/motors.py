@@ -72,10 +72,15 @@ def friction_sx(gear_ratio: np.ndarray, qd: Any, viscous: Any, coulomb_pos: Any,
         (n, 1) joint velocities, rad/s or m/s.
     viscous, coulomb_pos, coulomb_neg
         (n, 1) motor-side viscous (N m s/rad) and Coulomb (N m) coefficients.
+
+    Branch-free: the Coulomb torque is ``Tc+ (qd > 0) + Tc- (qd < 0)`` with the comparisons as 0/1
+    factors, which C evaluates without a jump (no misprediction where a joint reverses); for finite
+    coefficients it rounds to the same bits as the choice ``Tc+ if qd > 0 else Tc- if qd < 0 else 0``
+    (``x * 1 = x``, ``x * 0 = +-0`` and ``y + +-0 = y``; at ``qd = 0`` or NaN both give +0).
     """
     terms = []
     for i, (g, visc) in enumerate(zip(np.asarray(gear_ratio, dtype=float), viscous_friction_sx(gear_ratio, qd, viscous))):
-        coulomb = ca.if_else(qd[i] > 0, coulomb_pos[i], ca.if_else(qd[i] < 0, coulomb_neg[i], 0))
+        coulomb = coulomb_pos[i] * (qd[i] > 0) + coulomb_neg[i] * (qd[i] < 0)
         terms.append(visc + abs(g) * coulomb)
     return ca.vertcat(*terms)
 

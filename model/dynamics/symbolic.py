@@ -2,20 +2,26 @@
 
 Every Function takes dense column vectors and returns dense outputs; ``p`` is
 the parameter vector of :mod:`model.dynamics.parameters`. The compiled set
-(:data:`COMPILED_FUNCTIONS`) is built from Newton-Euler passes only, so its
-size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T solve of
-``accel``), never like the n^4 of the expanded Lagrange model:
+(:data:`COMPILED_FUNCTIONS`) is built from recursive algorithms only (Newton-Euler, the
+composite-rigid-body algorithm, a recursive Coriolis matrix), each Function from the formulation
+of fewest operations, so its size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T
+solve of ``accel``), never like the n^4 of the expanded Lagrange model:
 
-* ``inertia(q, p) -> B``: column j is ``rne(q, 0, e_j)`` without gravity and
-  friction; the lower triangle is formed and mirrored, so B is exactly symmetric.
-* ``coriolis(q, qd, p) -> C``: ``C = 1/2 (Bdot + J - J^T)`` with
+* ``inertia(q, p) -> B``: by the composite-rigid-body algorithm (:mod:`model.dynamics.crba`,
+  reflected motors, in body frames or in frame 0) or from the columns ``rne(q, 0, e_j)``
+  without gravity and friction (lower triangle mirrored), whichever has fewer operations (:attr:`DynamicsFunctions.formulations`
+  says which); B is exactly symmetric either way, and ``coriolis`` and ``accel`` use the same B.
+* ``coriolis(q, qd, p) -> C``: the recursion of :mod:`model.dynamics.coriolis_recursive` in frame 0
+  (reflected motors) or ``C = 1/2 (Bdot + J - J^T)``, whichever has fewer operations, the latter with
   ``J = d(B(q) v)/dq`` at ``v = qd``, ``B(q) v = rne(q, 0, v)`` (one pass, no
   gravity, no friction) and ``Bdot = dB/dq . qd``; both forward-mode
   derivatives (see ``docs/model-equations.md``). This is the Christoffel C.
 * ``gravload(q, p) -> g``: ``rne(q, 0, 0)`` without friction.
 * ``friction(qd, p) -> F``
 * ``rne(q, qd, qdd, p) -> tau``: ``B qdd + C qd + g + F`` by Newton-Euler.
-* ``accel(q, qd, tau, p) -> qdd``: ``B^-1 (tau - rne(q, qd, 0))`` by an LDL^T solve.
+* ``accel(q, qd, tau, p) -> qdd``: ``B^-1 (tau - rne(q, qd, 0))`` by an LDL^T solve of the chosen B,
+  or by the articulated-body algorithm in frame 0 (:mod:`model.dynamics.aba`, reflected motors),
+  whichever has fewer operations.
 
 The Lagrange model stays available as the independent check, built on first
 access only (its size grows like n^4): ``inertia_lagrange``,
@@ -36,6 +42,9 @@ from ..description import RobotDescription
 from .lagrange import lagrange_model
 from .linalg import ldl_solve_sx
 from .motors import check_motor_model, friction_sx, viscous_friction_sx
+from .aba import aba_world_sx
+from .coriolis_recursive import coriolis_world_sx
+from .crba import crba_sx, crba_world_sx
 from .newton_euler import rne_sx
 from .parameters import SymbolicParameters, parameter_layout, split_parameters
 
@@ -82,6 +91,8 @@ class DynamicsFunctions:
     accel: ca.Function
     description: RobotDescription = field(repr=False, compare=False)
     motor_model: str = "reflected"
+    #: How B(q) was formed, with the operation counts the choice was made on (one line for ``manip build``).
+    formulations: str = field(default="", compare=False)
 
     @cached_property
     def lagrange(self) -> LagrangeFunctions:
@@ -187,6 +198,15 @@ def coriolis_ne_sx(desc: RobotDescription, motor_model: str, q: ca.SX, qd: ca.SX
     return 0.5 * (Bdot + J - J.T)
 
 
+def _smallest(candidates: dict[str, ca.SX], inputs: list[ca.SX]) -> tuple[str, ca.SX, str]:
+    """The candidate expression of fewest operations (after CSE): its name, itself, and a line giving every count."""
+    ops = {k: int(ca.Function("candidate", inputs, [ca.densify(ca.cse(e))]).n_instructions())
+           for k, e in candidates.items()}
+    best = min(ops, key=lambda k: (ops[k], list(ops).index(k)))
+    others = ", ".join(f"{k} {v:,}" for k, v in ops.items() if k != best)
+    return best, candidates[best], f"{best} ({ops[best]:,} operations{'; ' + others if others else ''})"
+
+
 def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> DynamicsFunctions:
     """Build the dynamics Functions of ``desc`` (link inertial data baked in as constants)."""
     check_motor_model(motor_model)
@@ -197,9 +217,24 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
     tau_ne = rne_sx(desc, motor_model, q, qd, qdd, params)
     B_cols = _inertia_columns_ne(desc, motor_model, q, params)
     B = ca.tril(B_cols) + ca.tril(B_cols, False).T  # the lower triangle, mirrored: exactly symmetric
-    qdd_ne = _accel_sx(desc, motor_model, s, B_cols=B_cols)
+    reflected = motor_model == "reflected"  # CRBA and the recursive C carry rotors as G^2 Jm only
+    candidates = {"Newton-Euler columns": B}
+    if reflected:
+        candidates["composite-rigid-body"] = crba_sx(desc, q, params)
+        candidates["composite-rigid-body in frame 0"] = crba_world_sx(desc, q, params)
+    name_B, B, said_B = _smallest(candidates, [q, p])
+    if name_B != "Newton-Euler columns":
+        B_cols = B
+    candidates = {"LDL^T of B": _accel_sx(desc, motor_model, s, B_cols=B_cols)}
+    if reflected:
+        candidates["articulated-body in frame 0"] = aba_world_sx(desc, q, qd, tau - s.friction(qd), params)
+    _, qdd_ne, said_A = _smallest(candidates, [q, qd, tau, p])
     g = rne_sx(desc, motor_model, q, zero, zero, params, with_friction=False)
-    C = coriolis_ne_sx(desc, motor_model, q, qd, params, B)
+    candidates = {"1/2 (Bdot + J - J^T)": coriolis_ne_sx(desc, motor_model, q, qd, params, B)}
+    if reflected:
+        candidates["recursive in frame 0"] = coriolis_world_sx(desc, q, qd, params)
+    _, C, said_C = _smallest(candidates, [q, qd, p])
+    formulations = f"inertia: {said_B}; accel: {said_A}; coriolis: {said_C}"
     F = s.friction(qd)
 
     d = ca.densify
@@ -212,6 +247,7 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
         accel=ca.Function("accel", [q, qd, tau, p], [d(ca.cse(qdd_ne))], ["q", "qd", "tau", "p"], ["qdd"]),
         description=desc,
         motor_model=motor_model,
+        formulations=formulations,
     )
 
 
