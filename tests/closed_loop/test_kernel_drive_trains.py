@@ -156,3 +156,17 @@ def test_a_cascade_sweep_refuses_a_design_quantity(tmp_path, extra, key):
         load_spec(path)
     msg = str(info.value)
     assert key in msg and "[cascade]" in msg and len(msg.splitlines()) == 1
+
+
+def test_the_fmu_rerun_of_a_cascade_sweep_is_refused_in_one_line(tmp_path):
+    """The FMU master (``run_closed_loop``) hands a controller q, qd and starts the plant at rest: a cascade case
+    is refused by name rather than run wrong."""
+    from closed_loop.sweep import rerun_case_through_fmu
+    from closed_loop.sweep_spec import SweepSpecError, spec_from_dict
+
+    spec = spec_from_dict({"robot": "manutec_r3", "controller": "cascade", "samples": 2,
+                           "vary": {"payload_mass": [0.0, 1.0]}})
+    with pytest.raises(SweepSpecError) as info:
+        rerun_case_through_fmu(spec, 0, tmp_path)
+    assert "controller: 'cascade'" in str(info.value) and len(str(info.value).splitlines()) == 1
+    assert info.value.parameter == "controller"
