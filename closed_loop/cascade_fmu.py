@@ -2,7 +2,8 @@
 
 Built by the same variable table and C wrapper as every FMU (:func:`fmu.build.build_fmu`): no continuous
 states, the PI integrators ``x[i]`` a sampled discrete state ticked once per period ``1 / rate_hz``, the
-output computed from ``x_k`` and the inputs (direct feedthrough), exactly as
+output computed from ``x_k`` and the inputs (direct feedthrough) by the law of
+:func:`~control_design.cascade.cascade_law` (the compiled closed loop's), the operations of
 :meth:`~control_design.cascade.CascadeController.update_motor`:
 
 ==============  ===========================================================================
@@ -25,7 +26,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from control_design.cascade import CascadeController
+from control_design.cascade import CascadeController, cascade_law
 from fmu.build import build_fmu
 from fmu.variables import DiscreteStates, ModelSpec, Quantity
 from model.robot import Robot
@@ -40,9 +41,8 @@ def cascade_spec(controller: CascadeController, robot: Robot, *, model_identifie
     q_ref, qd_ref, qm, qdm = (ca.SX.sym(s, n) for s in ("q_ref", "qd_ref", "q_m", "qd_m"))
     kp, ks, ti, k, G = (ca.SX.sym(s, n) for s in ("kp", "ks", "ti", "torque_constant", "gear_ratio"))
     d = ca.SX.sym("xpi", n)
-    e = G * qd_ref + kp * (G * q_ref - qm) - qdm
-    tau = k * ks * (d + e)
-    d_next = d + controller.dt * e / ti
+    # the one cascade law (the compiled closed loop's), the period a constant of this FMU
+    tau, d_next = cascade_law(n).function(qm, qdm, q_ref, qd_ref, kp, ks, ti, k, G, controller.dt, d)
     x = ca.SX.sym("x", 0)
     u = ca.vertcat(q_ref, qd_ref, qm, qdm)
     p = ca.vertcat(kp, ks, ti, k, G)

@@ -209,7 +209,8 @@ def rerun_case_through_fmu(spec: SweepSpec, case: int, workdir: str | Path) -> A
     exported as it is (its payload and friction the FMU parameters' start values, its link masses scaled in
     the exported description) and driven by the case's Python controller through FMPy (its one-period delay
     included). The FMU integrates the plant the sweep's kernel does, with the same rule: its ``max_error`` is
-    the table's, to rounding. The FMU is written into ``workdir``.
+    the table's, to rounding. The FMU is written into ``workdir``. A cascade sweep is refused (SweepSpecError): the
+    FMU master does not hand the controller the rotor states nor start in the drive trains' equilibrium.
     """
     from control_design.computed_torque import ModelMismatch, plant_with_mismatch
     from fmu.build import export_fmu
@@ -217,6 +218,10 @@ def rerun_case_through_fmu(spec: SweepSpec, case: int, workdir: str | Path) -> A
     from .delay import OnePeriodDelay
     from .master import run_closed_loop
 
+    if spec.controller == "cascade":  # the FMU master hands a controller q, qd and starts the plant at rest
+        raise SweepSpecError(f"{spec.source}: controller: 'cascade': the FMU master does not read the rotor states "
+                             f"or start in the drive trains' equilibrium yet; re-run the case in the Python loop "
+                             f"(simulate_tracking)", parameter="controller")
     setup = case_setup(spec)
     values = dict(zip(spec.quantities, case_values(spec, np.array([case]))[0]))
     controller, sched, p, mass_scale, delay, gains = _case_inputs(spec, setup, values)

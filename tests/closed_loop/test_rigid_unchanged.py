@@ -1,4 +1,5 @@
-"""A rigid robot's closed loop gives the numbers it gave before drive trains existed, bit for bit (issue 23).
+"""A rigid robot's closed loop (the Python loop and the compiled one) gives the numbers it gave before drive trains
+existed, bit for bit (issue 23).
 
 The reference is the run of the same script on commit 43fb6b5 (main before the drive trains), this machine's
 compiler and libm (gcc, glibc): the SHA-256 of the float64 bytes of ``[t, q, qd, tau_m]`` over 2 s, and the last
@@ -41,3 +42,41 @@ def test_rigid_closed_loop_is_unchanged(name, kind):
     digest, last = _MAIN[(name, kind)]
     np.testing.assert_allclose(data[-1], last, rtol=1e-12, atol=1e-15)
     assert hashlib.sha256(data.tobytes()).hexdigest() == digest
+
+
+#: The compiled closed loop (sweeps) on commit 43fb6b5, this machine: robot, controller, one-period delay ->
+#: (SHA-256 of ``[t, q, qd, tau_m]``, SHA-256 of the five metric rows, q of joint 1 at 2 s to 17 digits); the plant
+#: with a 1.5 kg payload and its link masses times 1.1 (the kernel's inputs), gains of a 20 rad/s design at 1 kHz.
+_MAIN_KERNEL = {
+    ("scara", "pd", False): ("7ae185705ec4ba45eb528e53a99f1ab45e3012ab3ea0d08decfb6a552329134e",
+                             "d5632e448ed28044ecfd5807aa4809dd43c0955a419ebcbe84dc646d7d1f210b", 1.244354183266444),
+    ("puma560", "pid", False): ("18f89c087b0be0aae2d739f3fb336f3cc0bf894a5b7a3a11eac8b756699262a5",
+                                "134c9be2abb3bc8a6bb8dfe50fbc94d873492d9b52a9d7e42e09849781bc41dc",
+                                -1.1051032193012855),
+    ("puma560", "ct", True): ("82f76b7883121eaadfa4f7ef60c93e7e46dcc5973ce72dc784efbc9db363eb1b",
+                              "2945ec4608e03e447d92f8900d31a9ffbf769bd1c746a72c16b6221fd980b5df", -1.104066623222705),
+}
+
+
+@pytest.mark.parametrize("name, kind, delay", list(_MAIN_KERNEL))
+def test_rigid_compiled_closed_loop_is_unchanged(name, kind, delay):
+    """The kernel that now carries drive trains (the plant's whole state, a motor-side law) runs a rigid robot
+    as before, bit for bit: samples and metrics (the PID's integrator state and the delay included)."""
+    from closed_loop.kernel import closed_loop_kernel
+    from closed_loop.schedule import Schedule
+
+    robot = load_robot(name)
+    design = design_robot(robot, kind, 20.0, 0.7, phase_margin=None, rate_hz=1000.0, analyse=False)
+    controller = design.controller(1000.0)
+    sched = Schedule.build(robot, task_trajectory(robot, None, None, None), controller.dt,
+                           rate_hz=controller.rate_hz, t_final=2.0)
+    p = robot.parameters.with_payload(1.5, [0.0, 0.0, 0.05])
+    run = closed_loop_kernel(robot, kind).run(controller, sched, p, link_mass_scale=1.1, delay=delay, record=True)
+    r = run.result
+    data = np.ascontiguousarray(np.column_stack([r.t, r.q, r.qd, r.tau_m]))
+    metrics = np.ascontiguousarray(np.concatenate([run.max_error, run.rms_error, run.peak_motor_torque,
+                                                   run.peak_motor_velocity, run.saturated_fraction]))
+    digest, metrics_digest, q_end = _MAIN_KERNEL[(name, kind, delay)]
+    np.testing.assert_allclose(r.q[-1, 0], q_end, rtol=1e-12)
+    assert hashlib.sha256(data.tobytes()).hexdigest() == digest
+    assert hashlib.sha256(metrics.tobytes()).hexdigest() == metrics_digest
