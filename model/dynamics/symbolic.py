@@ -4,7 +4,8 @@ Every Function takes dense column vectors and returns dense outputs; ``p`` is
 the parameter vector of :mod:`model.dynamics.parameters`. The compiled set
 (:data:`COMPILED_FUNCTIONS`) is built from recursive algorithms only (Newton-Euler, the
 composite-rigid-body algorithm, a recursive Coriolis matrix), each Function from the formulation
-of fewest operations, so its size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T
+of fewest operations (from :data:`RECURSIVE_MIN_JOINTS` joints; smaller arms keep the
+Newton-Euler forms and their numbers bit for bit), so its size grows like n^2 (``coriolis``, ``inertia``) or n^3 (the LDL^T
 solve of ``accel``), never like the n^4 of the expanded Lagrange model:
 
 * ``inertia(q, p) -> B``: by the composite-rigid-body algorithm (:mod:`model.dynamics.crba`,
@@ -54,9 +55,13 @@ __all__ = [
     "LagrangeFunctions",
     "build_functions",
     "build_lagrange_functions",
+    "RECURSIVE_MIN_JOINTS",
     "coriolis_ne_sx",
     "plant_terms_sx",
 ]
+
+#: The fewest joints for which the recursive forms (CRBA, ABA, recursive Coriolis) compete with the Newton-Euler ones.
+RECURSIVE_MIN_JOINTS = 6
 
 #: The Functions compiled for the numeric API (see :mod:`model.codegen`).
 COMPILED_FUNCTIONS: tuple[str, ...] = ("inertia", "coriolis", "gravload", "friction", "rne", "accel")
@@ -217,7 +222,9 @@ def build_functions(desc: RobotDescription, motor_model: str = "reflected") -> D
     tau_ne = rne_sx(desc, motor_model, q, qd, qdd, params)
     B_cols = _inertia_columns_ne(desc, motor_model, q, params)
     B = ca.tril(B_cols) + ca.tril(B_cols, False).T  # the lower triangle, mirrored: exactly symmetric
-    reflected = motor_model == "reflected"  # CRBA and the recursive C carry rotors as G^2 Jm only
+    # CRBA, ABA and the recursive C carry rotors as G^2 Jm only; arms of fewer than RECURSIVE_MIN_JOINTS joints
+    # keep the Newton-Euler forms (a few dozen operations apart there) and so their numbers bit for bit
+    reflected = motor_model == "reflected" and desc.n >= RECURSIVE_MIN_JOINTS
     candidates = {"Newton-Euler columns": B}
     if reflected:
         candidates["composite-rigid-body"] = crba_sx(desc, q, params)
