@@ -11,7 +11,7 @@ The FMU is made of
   ``fmi3_functions.c``, chosen by ``fmi_version`` (:data:`WRAPPER_SOURCES`);
 * the standard FMI 2.0.1 or 3.0.2 headers (``fmu/c/fmi2/``, ``fmu/c/fmi3/``,
   BSD-2 licence of the Modelica Association, notice in each file); the FMI 2
-  ones honour ``FMI2_FUNCTION_PREFIX``: a source FMU compiled with it links
+  ones honour ``FMI2_FUNCTION_PREFIX``, the FMI 3 ones ``FMI3_FUNCTION_PREFIX``: a source FMU compiled with it links
   statically next to other FMUs (the wrapper's internal functions take the prefix too).
 
 Generation, compiler discovery and flags are those of :mod:`model.codegen`
@@ -44,6 +44,7 @@ from model.files import atomic_path
 from model.version import __version__
 
 from .cross import CASADI_CFLAGS, CFLAGS, CrossCompileError, compiler_for, place_binaries
+from .limits import write_limits_h
 from .platforms import Platform, UnsupportedHostError, host_platform, platform_folder, resolve_platforms
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
@@ -257,6 +258,7 @@ def generate_sources(spec: ModelSpec, sources: Path, *, fmi_version: int = 2, pr
     for name in FMI_HEADERS[fmi_version]:
         shutil.copyfile(headers / name, sources / name)
 
+    write_limits_h(sources)  # MW_MAX_SUBSTEPS, MW_SUBSTEP_RTOL from the Python constants
     guid = _guid(spec, sources, table)
     (sources / "model_data.h").write_text(table.model_data_h(guid))
     (sources / "model_data.c").write_text(table.model_data_c(casadi_h))
