@@ -790,6 +790,7 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     check_fmu_archive(fmu_path)  # FmuArchiveError (a ValueError) naming the file, before anything is extracted
     _say(progress, "validating modelDescription.xml with FMPy")
     report = ValidationReport(fmu_path, model_description_problems(fmu_path), *binary_problems(fmu_path))
+    _ls_ref_check(report, fmu_path, progress)
     report.robot = fmu_robot(fmu_path)
     if report.robot is None:
         return report
@@ -902,6 +903,25 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
         report.checks.append(Check("libcosim vs FMPy", report.cosim_vs_fmpy / scale, TOLERANCES["cosim"],
                                    f"max difference between libcosim and FMPy Co-Simulation / {scale:.3g}"))
     return report
+
+
+def _ls_ref_check(report: ValidationReport, fmu_path: str, progress: Progress | None) -> None:
+    """Replay the FMU's FMI-LS-REF experiment (:mod:`fmu.ls_ref`) with FMPy; a malformed one is a failed check."""
+    from .ls_ref import LS_REF_DIR, read_experiment, replay_problems
+
+    try:
+        exp = read_experiment(fmu_path)
+    except InputError as exc:
+        report.checks.append(Check("FMI-LS-REF replay", float("nan"), 1.0, f"unreadable experiment: {exc}"))
+        return
+    if exp is None:
+        report.notes.append(f"no FMI-LS-REF experiment in {LS_REF_DIR}/: nothing to replay")
+        return
+    _say(progress, f"FMI-LS-REF: replaying the FMU's own experiment ({exp.stop_time:g} s) with FMPy")
+    worst, problems = replay_problems(fmu_path, exp)
+    what = "max |replay - reference| / tolerance over q and qd at every reference row"
+    report.checks.append(Check("FMI-LS-REF replay", worst if not problems else float("nan"), 1.0,
+                               what if not problems else f"{what}: {'; '.join(problems)}"))
 
 
 def _internal_step(fmu_path: str) -> float:
