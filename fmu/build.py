@@ -198,17 +198,19 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
 
 def _reference_experiment(robot: Any, internal_step: float, fmi_version: int) -> dict[str, str]:
     """The FMI-LS-REF files (:mod:`fmu.ls_ref`) of ``robot``'s FMU: the task's feed-forward held 10 ms over 0.5 s,
-    and the plant's fixed-step rule at ``internal_step`` (s) under it, at every internal step."""
+    and the plant's fixed-step rule at ``internal_step`` (s) under it, at every communication step: the internal
+    step, or 1 ms when it is longer (the FMU then takes one RK4 step of 1 ms per call, as the rule does)."""
     import numpy as np
 
-    from .ls_ref import EXPERIMENT_HOLD, EXPERIMENT_T_END, experiment_files
+    from .ls_ref import EXPERIMENT_HOLD, EXPERIMENT_MAX_STEP, EXPERIMENT_T_END, experiment_files
     from .validate import feedforward_profile, plant_states
 
-    k = int(round(EXPERIMENT_T_END / internal_step))
-    if k < 1 or abs(k * internal_step - EXPERIMENT_T_END) > 1e-9 * EXPERIMENT_T_END:  # e.g. a step of 0.3 s
-        k = max(1, int(math.ceil(EXPERIMENT_T_END / internal_step)))
-    t = np.arange(k + 1) * internal_step             # t0 + k h, never a running sum
-    hold = max(EXPERIMENT_HOLD, internal_step)
+    step = min(internal_step, EXPERIMENT_MAX_STEP)
+    k = int(round(EXPERIMENT_T_END / step))
+    if k < 1 or abs(k * step - EXPERIMENT_T_END) > 1e-9 * EXPERIMENT_T_END:  # e.g. a step of 0.3 ms
+        k = max(1, int(math.ceil(EXPERIMENT_T_END / step)))
+    t = np.arange(k + 1) * step                      # t0 + k h, never a running sum
+    hold = max(EXPERIMENT_HOLD, step)
     profile = feedforward_profile(robot, t_end=int(math.ceil(t[-1] / hold - 1e-9)) * hold, hold=hold)
     X = plant_states(robot, t, np.array([profile.at(float(tk)) for tk in t[:-1]]), internal_step)
     return experiment_files(robot.name, t, profile.t_switch, profile.tau_m, X, fmi_version, profile.description)

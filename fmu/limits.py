@@ -13,6 +13,8 @@ from __future__ import annotations
 import string
 from pathlib import Path
 
+from model.errors import InputError
+
 from .variables import MAX_SUBSTEPS, SUBSTEP_RTOL, TEMPLATE_DIR
 
 __all__ = ["LIMITS_HEADER", "limits_h", "write_limits_h"]
@@ -24,9 +26,9 @@ LIMITS_HEADER = "mw_limits.h"
 def limits_h() -> str:
     """The text of ``mw_limits.h``: ``MW_MAX_SUBSTEPS`` (sub-steps, an integer) and ``MW_SUBSTEP_RTOL`` (relative)."""
     if not (isinstance(MAX_SUBSTEPS, int) and MAX_SUBSTEPS > 0):
-        raise ValueError(f"MAX_SUBSTEPS: expected a positive integer, got {MAX_SUBSTEPS!r}")
+        raise InputError(f"MAX_SUBSTEPS: expected a positive integer, got {MAX_SUBSTEPS!r}", parameter="MAX_SUBSTEPS")
     if not 0.0 < SUBSTEP_RTOL < 1.0:
-        raise ValueError(f"SUBSTEP_RTOL: expected a number in (0, 1), got {SUBSTEP_RTOL!r}")
+        raise InputError(f"SUBSTEP_RTOL: expected a number in (0, 1), got {SUBSTEP_RTOL!r}", parameter="SUBSTEP_RTOL")
     template = string.Template((TEMPLATE_DIR / LIMITS_HEADER).read_text())
     return template.substitute(max_substeps=str(MAX_SUBSTEPS), substep_rtol=repr(float(SUBSTEP_RTOL)))
 

@@ -58,6 +58,7 @@ __all__ = [
     "ANNOTATION_TYPE",
     "EXPERIMENT_T_END",
     "EXPERIMENT_HOLD",
+    "EXPERIMENT_MAX_STEP",
     "REF_RTOL",
     "Experiment",
     "experiment_files",
@@ -81,6 +82,8 @@ ANNOTATION_TYPE = "org.manipulator-workbench.reference-tolerances"
 EXPERIMENT_T_END = 0.5
 #: Comparison tolerance, relative to max(1, max |column|) (see the module docstring).
 REF_RTOL = 1e-9
+#: Longest communication step of the experiment, s (an FMU with a longer internal step is sampled at it).
+EXPERIMENT_MAX_STEP = 1e-3
 #: Hold of the feed-forward torques, s (those of :func:`fmu.validate.feedforward_profile`).
 EXPERIMENT_HOLD = 0.01
 

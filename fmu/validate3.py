@@ -26,6 +26,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from model.errors import InputError
+
 from .archive import check_fmu_archive
 from .check_results import FD_LADDER, RoundTrip
 
@@ -85,7 +87,7 @@ def state_roundtrip3(fmu_path: str | os.PathLike[str], inputs: Callable[[float],
     vin, in_sizes, in_where = _elements(md, input_names)
     vout, out_sizes, out_where = _elements(md, output_names)
     if in_where != list(range(sum(in_sizes))):
-        raise ValueError(f"expected whole input arrays in order, got {list(input_names)}")
+        raise InputError(f"expected whole input arrays in order, got {list(input_names)}", parameter="input_names")
     unzip = extract(str(fmu_path))
     try:
         def run(s: Any, k0: int, n: int) -> np.ndarray:

@@ -190,3 +190,14 @@ def test_parse_csv_refuses_bad_tables():
 def test_replay_problems_via_the_module_passes():
     worst, problems = replay_problems(scara_fmu())
     assert problems == [] and worst <= 1.0
+
+
+def test_an_internal_step_longer_than_1ms_is_sampled_at_1ms(tmp_path):
+    """internal_step 10 ms: the experiment steps 1 ms (the FMU takes one RK4 step of 1 ms per call, the rule too)."""
+    from fmu import export_fmu
+
+    path = _quiet(export_fmu, "planar2r", tmp_path / "coarse.fmu", step=1e-2)
+    exp = read_experiment(path)
+    assert exp.step_size == 1e-3 and exp.reference.shape == (501,)
+    worst, problems = replay_problems(path, exp)
+    assert problems == [] and worst <= 1.0
