@@ -22,6 +22,8 @@ _EXPORTS = {
     "validate": ("ValidationReport", "validate_fmu"),
     "variables": ("ModelSpec", "VariableTable", "build_table", "spec_from_plant", "trivial_spec"),
     "export_checks": ("SingularInertiaError", "check_inertia"),
+    "limits": ("limits_h",),
+    "ls_ref": ("read_experiment", "replay_problems"),
 }
 
 __all__ = export_names(_EXPORTS)

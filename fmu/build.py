@@ -11,7 +11,7 @@ The FMU is made of
   ``fmi3_functions.c``, chosen by ``fmi_version`` (:data:`WRAPPER_SOURCES`);
 * the standard FMI 2.0.1 or 3.0.2 headers (``fmu/c/fmi2/``, ``fmu/c/fmi3/``,
   BSD-2 licence of the Modelica Association, notice in each file); the FMI 2
-  ones honour ``FMI2_FUNCTION_PREFIX``: a source FMU compiled with it links
+  ones honour ``FMI2_FUNCTION_PREFIX``, the FMI 3 ones ``FMI3_FUNCTION_PREFIX``: a source FMU compiled with it links
   statically next to other FMUs (the wrapper's internal functions take the prefix too).
 
 Generation, compiler discovery and flags are those of :mod:`model.codegen`
@@ -27,6 +27,7 @@ cross-compiled by :mod:`fmu.cross` into the folders of :mod:`fmu.platforms`.
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import shutil
 import subprocess
@@ -34,7 +35,7 @@ import tempfile
 import uuid
 import zipfile
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import casadi as ca
 
@@ -44,6 +45,7 @@ from model.files import atomic_path
 from model.version import __version__
 
 from .cross import CASADI_CFLAGS, CFLAGS, CrossCompileError, compiler_for, place_binaries
+from .limits import write_limits_h
 from .platforms import Platform, UnsupportedHostError, host_platform, platform_folder, resolve_platforms
 from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, trivial_spec
 
@@ -188,8 +190,30 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     check_inertia(robot)  # a singular B(q) is refused here, naming the joint, not at the importer's first call
     _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {robot.motor_model} motors)")
     plant = build_plant(robot)  # everything the FMU is built from: the robot as it is, its parameters, its modes
-    return build_fmu(spec_from_plant(plant, step), path, fmi_version=fmi_version, platforms=targets,
-                     progress=progress)
+    spec = spec_from_plant(plant, step)
+    _say(progress, "FMI-LS-REF experiment: the plant's fixed-step rule under the task's feed-forward")
+    extra = _reference_experiment(robot, float(spec.step), fmi_version)
+    return build_fmu(spec, path, fmi_version=fmi_version, platforms=targets, progress=progress, extra=extra)
+
+
+def _reference_experiment(robot: Any, internal_step: float, fmi_version: int) -> dict[str, str]:
+    """The FMI-LS-REF files (:mod:`fmu.ls_ref`) of ``robot``'s FMU: the task's feed-forward held 10 ms over 0.5 s,
+    and the plant's fixed-step rule at ``internal_step`` (s) under it, at every communication step: the internal
+    step, or 1 ms when it is longer (the FMU then takes one RK4 step of 1 ms per call, as the rule does)."""
+    import numpy as np
+
+    from .ls_ref import EXPERIMENT_HOLD, EXPERIMENT_MAX_STEP, EXPERIMENT_T_END, experiment_files
+    from .validate import feedforward_profile, plant_states
+
+    step = min(internal_step, EXPERIMENT_MAX_STEP)
+    k = int(round(EXPERIMENT_T_END / step))
+    if k < 1 or abs(k * step - EXPERIMENT_T_END) > 1e-9 * EXPERIMENT_T_END:  # e.g. a step of 0.3 ms
+        k = max(1, int(math.ceil(EXPERIMENT_T_END / step)))
+    t = np.arange(k + 1) * step                      # t0 + k h, never a running sum
+    hold = max(EXPERIMENT_HOLD, step)
+    profile = feedforward_profile(robot, t_end=int(math.ceil(t[-1] / hold - 1e-9)) * hold, hold=hold)
+    X = plant_states(robot, t, np.array([profile.at(float(tk)) for tk in t[:-1]]), internal_step)
+    return experiment_files(robot.name, t, profile.t_switch, profile.tau_m, X, fmi_version, profile.description)
 
 
 def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_inputs: int = 1,
@@ -199,8 +223,12 @@ def export_trivial_fmu(path: str | os.PathLike[str], *, step: float = 1e-3, n_in
 
 
 def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, fmi_version: int = 2,
-              platforms: str | Sequence[str | Platform] | None = None, progress: Progress | None = None) -> Path:
-    """Generate, compile (for the host and ``platforms``) and zip the FMI ``fmi_version`` FMU of ``spec`` into ``path``."""
+              platforms: str | Sequence[str | Platform] | None = None, progress: Progress | None = None,
+              extra: Mapping[str, str] | None = None) -> Path:
+    """Generate, compile (for the host and ``platforms``) and zip the FMI ``fmi_version`` FMU of ``spec`` into ``path``.
+
+    ``extra`` maps archive paths (``extra/...``, ``documentation/...``) to text files added as they are
+    (the FMI-LS-REF experiment of :mod:`fmu.ls_ref`)."""
     path = Path(path)
     if path.suffix != ".fmu":
         raise InputError(f"expected a file name ending in .fmu, got {str(path)!r}", parameter="path")
@@ -220,6 +248,11 @@ def build_fmu(spec: ModelSpec, path: str | os.PathLike[str], *, fmi_version: int
 
             (root / ROBOT_RESOURCE).parent.mkdir(parents=True, exist_ok=True)
             (root / ROBOT_RESOURCE).write_text(spec.robot_json)
+        for name, text in (extra or {}).items():
+            if not name.startswith(("extra/", "documentation/")) or ".." in name.split("/"):
+                raise FmuBuildError(f"extra file {name!r}: expected a path under extra/ or documentation/")
+            (root / name).parent.mkdir(parents=True, exist_ok=True)
+            (root / name).write_text(text)
         _say(progress, f"writing {path}")
         with atomic_path(path) as tmp_fmu, zipfile.ZipFile(tmp_fmu, "w", zipfile.ZIP_DEFLATED) as zf:
             for file in sorted(root.rglob("*")):
@@ -257,6 +290,7 @@ def generate_sources(spec: ModelSpec, sources: Path, *, fmi_version: int = 2, pr
     for name in FMI_HEADERS[fmi_version]:
         shutil.copyfile(headers / name, sources / name)
 
+    write_limits_h(sources)  # MW_MAX_SUBSTEPS, MW_SUBSTEP_RTOL from the Python constants
     guid = _guid(spec, sources, table)
     (sources / "model_data.h").write_text(table.model_data_h(guid))
     (sources / "model_data.c").write_text(table.model_data_c(casadi_h))

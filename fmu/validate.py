@@ -15,7 +15,9 @@
   Model Exchange within its tolerance, and Co-Simulation against the same rule at
   the FMU's own step to rounding (the FMU is the plant);
 * FMU state get/set and serialise/deserialise round trips, bit for bit;
-* directional derivatives against central finite differences;
+* directional derivatives against central finite differences (FMI 3.0: the adjoint against them too;
+  the FMI 3.0 calls are :mod:`fmu.validate3`'s, the list of checks is the same for both versions);
+* the FMU's own FMI-LS-REF experiment replayed with FMPy (:mod:`fmu.ls_ref`);
 * libcosim, the second importer (FMI 2.0 only: skipped for an FMI 3.0 FMU): two instances side by side,
   against FMPy.
 
@@ -45,6 +47,7 @@ import numpy as np
 from model.errors import InputError
 
 from .archive import check_fmu_archive, model_description_xml
+from .check_results import FD_LADDER, RoundTrip
 from .variables import substeps
 from model.limits import MAX_SAMPLES
 
@@ -435,22 +438,6 @@ class Check:
 
 # ---------------------------------------------------------- low-level checks
 
-@dataclass(frozen=True)
-class RoundTrip:
-    """FMU-state round trips of a Co-Simulation run (bit-for-bit comparisons)."""
-
-    steps_before: int
-    steps_after: int
-    serialized_size: int
-    get_set_identical: bool
-    deserialized_identical: bool
-    me_identical: bool
-
-    @property
-    def ok(self) -> bool:
-        return self.get_set_identical and self.deserialized_identical and self.me_identical
-
-
 def _vrs(md: Any, names: Sequence[str]) -> list[int]:
     by_name = {v.name: v.valueReference for v in md.modelVariables}
     return [by_name[n] for n in names]
@@ -574,8 +561,6 @@ def _derivatives(m: Any, nx: int) -> np.ndarray:
     return np.array(buf[:])
 
 
-#: Rungs of the finite-difference ladder of :func:`directional_derivative_error`: steps rel_step x 10^-k.
-FD_LADDER = 4
 
 
 def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7,
@@ -790,6 +775,7 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
     check_fmu_archive(fmu_path)  # FmuArchiveError (a ValueError) naming the file, before anything is extracted
     _say(progress, "validating modelDescription.xml with FMPy")
     report = ValidationReport(fmu_path, model_description_problems(fmu_path), *binary_problems(fmu_path))
+    _ls_ref_check(report, fmu_path, progress)
     report.robot = fmu_robot(fmu_path)
     if report.robot is None:
         return report
@@ -868,21 +854,32 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
 
     from .simulate import fmi_version
 
-    if fmi_version(fmu_path) == 3:
-        report.notes.append("FMI 3.0: the FMU-state round trips, directional and adjoint derivatives and bad calls "
-                            "are checked by tests/fmu/test_fmi3.py, not here; libcosim imports FMI 2.0 only")
-        return report
+    version = fmi_version(fmu_path)
     _say(progress, "FMU state get/set and serialisation round trips")
-    report.roundtrip = state_roundtrip(fmu_path, profile.at, tau_names, state_names + tool_names, step=step)
+    if version == 3:
+        from .validate3 import directional_derivative_error3, state_roundtrip3
+
+        report.roundtrip = state_roundtrip3(fmu_path, profile.at, tau_names, state_names + tool_names, step=step)
+    else:
+        report.roundtrip = state_roundtrip(fmu_path, profile.at, tau_names, state_names + tool_names, step=step)
     r = report.roundtrip
     report.checks.append(Check("FMU state round trips", float(3 - sum((r.get_set_identical, r.deserialized_identical,
                                                                         r.me_identical))), 0.0,
                                "continuations that differ from the original run, bit for bit (of 3)"))
     _say(progress, "directional derivatives against finite differences")
-    report.directional = directional_derivative_error(fmu_path)
-    report.checks.append(Check("directional derivatives", report.directional[0], TOLERANCES["directional"],
-                               f"max |AD - FD| / (1 + |FD|) over {report.directional[1]} entries"))
+    if version == 3:  # FMI 3.0 has the reverse mode too: it must be the transpose of the forward mode
+        worst, count, adjoint = directional_derivative_error3(fmu_path)
+        report.directional = (max(worst, adjoint), count)
+        what = (f"max |AD - FD| / (1 + |FD|) over {count} entries ({worst:.2e}), and adjoint against forward "
+                f"max |J_adj^T - J| / max |J| ({adjoint:.2e})")
+    else:
+        report.directional = directional_derivative_error(fmu_path)
+        what = f"max |AD - FD| / (1 + |FD|) over {report.directional[1]} entries"
+    report.checks.append(Check("directional derivatives", report.directional[0], TOLERANCES["directional"], what))
 
+    if with_cosim and version == 3:
+        report.cosim_skipped = "FMI 3.0: libcosim imports FMI 2.0 only"
+        with_cosim = False
     if with_cosim:
         from .cosim import libcosim_unavailable, run_libcosim
 
@@ -902,6 +899,25 @@ def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: 
         report.checks.append(Check("libcosim vs FMPy", report.cosim_vs_fmpy / scale, TOLERANCES["cosim"],
                                    f"max difference between libcosim and FMPy Co-Simulation / {scale:.3g}"))
     return report
+
+
+def _ls_ref_check(report: ValidationReport, fmu_path: str, progress: Progress | None) -> None:
+    """Replay the FMU's FMI-LS-REF experiment (:mod:`fmu.ls_ref`) with FMPy; a malformed one is a failed check."""
+    from .ls_ref import LS_REF_DIR, read_experiment, replay_problems
+
+    try:
+        exp = read_experiment(fmu_path)
+    except InputError as exc:
+        report.checks.append(Check("FMI-LS-REF replay", float("nan"), 1.0, f"unreadable experiment: {exc}"))
+        return
+    if exp is None:
+        report.notes.append(f"no FMI-LS-REF experiment in {LS_REF_DIR}/: nothing to replay")
+        return
+    _say(progress, f"FMI-LS-REF: replaying the FMU's own experiment ({exp.stop_time:g} s) with FMPy")
+    worst, problems = replay_problems(fmu_path, exp)
+    what = "max |replay - reference| / tolerance over q and qd at every reference row"
+    report.checks.append(Check("FMI-LS-REF replay", worst if not problems else float("nan"), 1.0,
+                               what if not problems else f"{what}: {'; '.join(problems)}"))
 
 
 def _internal_step(fmu_path: str) -> float:

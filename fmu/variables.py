@@ -62,9 +62,9 @@ STEP_NAME = "internal_step"
 #: Smallest internal step, s: the check of :class:`ModelSpec` and the ``min`` of ``internal_step`` in the XML.
 #: With at most :data:`MAX_SUBSTEPS` sub-steps per ``fmi2DoStep`` or ``fmi3DoStep`` it bounds the work of one call.
 MIN_STEP = 1e-6
-#: Most RK4 sub-steps of one ``fmi2DoStep`` or ``fmi3DoStep`` (``MW_MAX_SUBSTEPS`` of ``fmu/c/instance.h``); more is an error status.
+#: Most RK4 sub-steps of one ``fmi2DoStep`` or ``fmi3DoStep`` (rendered as ``MW_MAX_SUBSTEPS`` by :mod:`fmu.limits`); more is an error status.
 MAX_SUBSTEPS = 1_000_000
-#: Relative noise of ``h / internal_step`` forgiven when counting sub-steps (``MW_SUBSTEP_RTOL``).
+#: Relative noise of ``h / internal_step`` forgiven when counting sub-steps (rendered as ``MW_SUBSTEP_RTOL``).
 SUBSTEP_RTOL = 1e-8
 
 #: Value reference of the independent variable ``time`` in FMI 3.0 (the arrays follow from 1).

@@ -46,7 +46,9 @@
 #define MODES_NewDiscreteStates MW_MODE_EVENT
 #define MODES_EnterContinuousTimeMode MW_MODE_EVENT
 #define MODES_CompletedIntegratorStep MW_MODE_CONTINUOUS
-#define MODES_SetTime (MW_MODE_EVENT | MW_MODE_CONTINUOUS)
+/* FMI 2.0.5 (3.2.3; fmi-standard #394): time moves only in Continuous-Time Mode; Event Mode keeps the time of
+   the event (only a model without continuous states, a pure sampled system, may advance it there) */
+#define MODES_SetTime MW_MODE_CONTINUOUS
 #define MODES_SetContinuousStates MW_MODE_CONTINUOUS
 #define MODES_GetDerivatives (MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS | MW_MODE_TERMINATED | MW_MODE_ERROR)
 #define MODES_GetEventIndicators MODES_GetDerivatives
@@ -269,10 +271,11 @@ static int settable_now(MwInstance *inst, const MwVariable *v) {
             why = "is fixed: it can only be set before fmi2ExitInitializationMode";
         break;
     case MW_SET_STATE:
-        /* FMI 2.0.1: continuous states may also be set in Event and Continuous-Time Mode */
-        if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_CONTINUOUS)))
-            why = "is a continuous state: it can be set before fmi2ExitInitializationMode, or in event and "
-                  "continuous-time mode (Model Exchange)";
+        /* FMI 2.0.5 (3.2.3): in Event Mode only inputs and tunable parameters may be set; a continuous state
+           may be set before initialisation ends and in Continuous-Time Mode (FMI 2.0.1) */
+        if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_CONTINUOUS)))
+            why = "is a continuous state: it can be set before fmi2ExitInitializationMode, or in continuous-time "
+                  "mode (Model Exchange), not in event mode";
         break;
     case MW_SET_TUNABLE:
         if (!(mode & (MW_MODE_INSTANTIATED | MW_MODE_INIT | MW_MODE_EVENT | MW_MODE_STEP_COMPLETE)))
@@ -480,7 +483,9 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     const char *problem;
     char what[192];
-    ENTER(SetTime, FOR_ME, MODES_SetTime);
+    MwInstance *inst = mw_enter(c, "fmi2SetTime", FOR_ME,
+                                MODES_SetTime | (c != NULL && mw_model()->nx == 0 ? MW_MODE_EVENT : 0u), mode_name);
+    if (inst == NULL) return fmi2Error;
     problem = mw_set_time(inst, time, what, sizeof(what));
     return problem == NULL ? fmi2OK : fail(inst, "fmi2SetTime", problem);
 }

@@ -36,21 +36,18 @@
 
 /*
  * Names of the wrapper's internal functions. A shared library hides them
- * (MW_HIDDEN); a source FMU compiled with FMI2_FUNCTION_PREFIX, to be linked
- * statically next to other FMUs, gets them prefixed like the fmi2 functions,
- * so that two models in one program never share a symbol.
+ * (MW_HIDDEN); a source FMU compiled with FMI2_FUNCTION_PREFIX (FMI 2.0) or
+ * FMI3_FUNCTION_PREFIX (FMI 3.0), to be linked statically next to other FMUs,
+ * gets them prefixed like the fmi2/fmi3 functions, so that two models in one
+ * program never share a symbol. The rule is plant_step.h's (MW_PLANT_SYMBOL),
+ * which this header includes first.
  */
-#if defined(FMI2_FUNCTION_PREFIX)
-#define MW_PASTE_(a, b) a##b
-#define MW_PASTE(a, b) MW_PASTE_(a, b)
-#define MW_SYMBOL(name) MW_PASTE(FMI2_FUNCTION_PREFIX, name)
-#else
-#define MW_SYMBOL(name) name
-#endif
+#include "plant_step.h"
+#define MW_SYMBOL(name) MW_PLANT_SYMBOL(name)
 #define mw_model MW_SYMBOL(mw_model)
 
-/* mw_int, MwFunction and the plant's fixed-step rule (model/dynamics/c/plant_step.h, shipped in sources/). */
-#include "plant_step.h"
+/* mw_int, MwFunction and the plant's fixed-step rule come from plant_step.h
+   (model/dynamics/c/plant_step.h, shipped in sources/), included above. */
 
 /* Where a variable lives. */
 typedef enum {

@@ -317,12 +317,6 @@ def test_model_exchange_past_the_stop_time_is_an_error():
                       "t = 1.0009999999999999, past the stopTime 1 ")
     finally:
         h.close()
-    h = _with_stop_time("me", 1.0)
-    try:
-        assert status_of(h.fmu.setTime, 1.001) == fmi2Error     # event mode
-        assert_logged(h, fmi2Error, "logStatusError", "fmi2SetTime: time 1.0009999999999999 is past the stopTime 1 ")
-    finally:
-        h.close()
 
 
 def test_one_do_step_takes_at_most_a_million_sub_steps(cs_fresh):
@@ -590,22 +584,39 @@ def test_non_finite_values_from_get_real_are_a_discard_too(me):
 
 
 def test_a_state_can_be_set_in_continuous_time_mode(me):
-    """FMI 2.0.1 allows fmi2SetReal on a continuous state in Continuous-Time Mode (and in Event Mode)."""
+    """FMI 2.0.1 allows fmi2SetReal on a continuous state in Continuous-Time Mode."""
     before = me.fmu.getReal(me.vr("der(q[1])"))[0]
     assert status_of(me.fmu.setReal, me.vr("qd[1]"), [0.25]) == fmi2OK
     assert me.fmu.getReal(me.vr("qd[1]", "der(q[1])")) == [0.25, 0.25]     # der(q) = qd: the cache was refreshed
     assert before == 0.0
+
+
+def test_a_state_cannot_be_set_in_event_mode(me):
+    """FMI 2.0.5 (3.2.3): in Event Mode fmi2SetReal is for inputs and tunable parameters only; a continuous
+    state is refused with fmi2Error and a message, and keeps its value (a rejected call changes nothing)."""
     me.fmu.enterEventMode()
-    assert status_of(me.fmu.setReal, me.vr("q[2]"), [0.1]) == fmi2OK
-    assert me.fmu.getReal(me.vr("q[2]")) == [0.1]
+    q2 = me.fmu.getReal(me.vr("q[2]"))
+    assert status_of(me.fmu.setReal, me.vr("q[2]"), [0.1]) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2SetReal: variable q[2] is a continuous state",
+                  "not in event mode", 'mode "event mode"')
+    assert me.fmu.getReal(me.vr("q[2]")) == q2
 
 
-def test_set_time_may_not_go_back_in_event_mode(me):
+def test_inputs_and_tunable_parameters_can_be_set_in_event_mode(me):
+    """The negative control of the test above: what Event Mode does allow still works."""
+    me.fmu.enterEventMode()
+    assert status_of(me.fmu.setReal, me.vr("tau_m[1]"), [0.1]) == fmi2OK
+    assert status_of(me.fmu.setReal, me.vr("payload_mass"), [0.5]) == fmi2OK
+    assert me.fmu.getReal(me.vr("tau_m[1]", "payload_mass")) == [0.1, 0.5]
+
+
+def test_set_time_is_refused_in_event_mode(me):
+    """FMI 2.0.5 (3.2.3, fmi-standard #394): time advances only in Continuous-Time Mode for a model with
+    continuous states; fmi2SetTime in Event Mode is fmi2Error with a message."""
     me.fmu.setTime(0.5)
     me.fmu.enterEventMode()
-    assert status_of(me.fmu.setTime, 0.5) == fmi2OK
-    assert status_of(me.fmu.setTime, 0.25) == fmi2Error
-    assert_logged(me, fmi2Error, "logStatusError", "fmi2SetTime: time 0.25 is before the current time 0.5")
+    assert status_of(me.fmu.setTime, 0.5) == fmi2Error
+    assert_logged(me, fmi2Error, "logStatusError", "fmi2SetTime: illegal call sequence", 'mode "event mode"')
 
 
 def test_directional_derivative_with_an_output_as_known(me):

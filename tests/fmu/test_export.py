@@ -168,7 +168,7 @@ def test_binary_exports_only_fmi2_and_needs_only_libc_and_libm():
 def test_generated_files_are_stamped_and_the_standard_headers_are_shipped():
     with zipfile.ZipFile(scara_fmu()) as zf:
         names = set(zf.namelist())
-        for generated in ("sources/model_data.c", "sources/model_data.h", "sources/scara_casadi.c",
+        for generated in ("sources/model_data.c", "sources/model_data.h", "sources/mw_limits.h", "sources/scara_casadi.c",
                           "sources/scara_casadi.h", "modelDescription.xml"):
             assert STAMP in zf.read(generated).decode()[:400], generated
         header = zf.read("sources/model_data.h").decode()
@@ -314,9 +314,12 @@ def test_wrapper_compiles_cleanly_with_pedantic_warnings(tmp_path):
     from fmu.build import fmi_headers_dir
     from model.codegen import C_DIR as MODEL_C_DIR
 
+    from fmu.limits import write_limits_h
+
+    write_limits_h(tmp_path)  # the generated MW_MAX_SUBSTEPS, MW_SUBSTEP_RTOL
     for source in (C_DIR / "fmi2_functions.c", C_DIR / "instance.c", MODEL_C_DIR / "plant_step.c"):
         proc = subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow",
-                               "-Wstrict-prototypes", "-Werror", f"-I{C_DIR}", f"-I{MODEL_C_DIR}",
+                               "-Wstrict-prototypes", "-Werror", f"-I{C_DIR}", f"-I{MODEL_C_DIR}", f"-I{tmp_path}",
                                f"-I{fmi_headers_dir()}", "-c", str(source), "-o", str(tmp_path / "x.o")],
                               capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr

@@ -29,13 +29,18 @@
 #include "casadi_abi.h"
 
 /*
- * A source FMU compiled with FMI2_FUNCTION_PREFIX, to be linked statically next to other FMUs,
- * gets these names prefixed like its fmi2 functions, so that two models never share a symbol.
+ * A source FMU compiled with FMI2_FUNCTION_PREFIX (FMI 2.0) or FMI3_FUNCTION_PREFIX (FMI 3.0), to be
+ * linked statically next to other FMUs, gets these names prefixed like its fmi2/fmi3 functions, so
+ * that two models never share a symbol. The FMU wrapper's names (fmu/c/model.h) follow this rule.
  */
-#if defined(FMI2_FUNCTION_PREFIX)
+#if defined(FMI2_FUNCTION_PREFIX) || defined(FMI3_FUNCTION_PREFIX)
 #define MW_PLANT_PASTE_(a, b) a##b
 #define MW_PLANT_PASTE(a, b) MW_PLANT_PASTE_(a, b)
+#if defined(FMI2_FUNCTION_PREFIX)
 #define MW_PLANT_SYMBOL(name) MW_PLANT_PASTE(FMI2_FUNCTION_PREFIX, name)
+#else
+#define MW_PLANT_SYMBOL(name) MW_PLANT_PASTE(FMI3_FUNCTION_PREFIX, name)
+#endif
 #else
 #define MW_PLANT_SYMBOL(name) name
 #endif
