@@ -5,6 +5,11 @@ The reference is the run of the same script on commit 43fb6b5 (main before the d
 compiler and libm (gcc, glibc): the SHA-256 of the float64 bytes of ``[t, q, qd, tau_m]`` over 2 s, and the last
 row printed to 17 digits. Another compiler may round a last bit differently (the engines agree to rounding,
 not across compilers); the last row's 1e-12 check then still holds and says so.
+
+Since issue 27 an arm of ``RECURSIVE_MIN_JOINTS`` joints or more (the Puma) takes the inertia, accel and
+Coriolis of fewest operations (composite-rigid-body, articulated-body, recursive Coriolis): the same numbers
+to rounding, not the same bits. For those the Python loop's run is held to 43fb6b5's last row at 1e-12
+relative (issue 27's criterion) and its digest is not compared; smaller arms keep their bits.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import pytest
 from closed_loop.simulate import simulate_tracking
 from control_design.design import design_robot
 from control_design.reference import task_trajectory
+from model.dynamics.symbolic import RECURSIVE_MIN_JOINTS
 from model.robot import load_robot
 
 _MAIN = {  # robot, controller -> (sha256, last row) of commit 43fb6b5
@@ -41,7 +47,8 @@ def test_rigid_closed_loop_is_unchanged(name, kind):
     data = np.ascontiguousarray(np.column_stack([res.t, res.q, res.qd, res.tau_m]))
     digest, last = _MAIN[(name, kind)]
     np.testing.assert_allclose(data[-1], last, rtol=1e-12, atol=1e-15)
-    assert hashlib.sha256(data.tobytes()).hexdigest() == digest
+    if robot.n < RECURSIVE_MIN_JOINTS:
+        assert hashlib.sha256(data.tobytes()).hexdigest() == digest
 
 
 #: The compiled closed loop (sweeps) on commit 43fb6b5, this machine: robot, controller, one-period delay ->
