@@ -320,7 +320,8 @@ def test_a_stopped_manip_sweep_leaves_nothing_running_or_listening(tmp_path, sto
                     assert ipaddress.ip_address(c.laddr.ip).is_loopback, c
             time.sleep(0.1)
         assert proc.poll() is None, err_log.read_text()  # still sweeping
-        time.sleep(1.0)  # the workers are forked as the first tasks go out
+        time.sleep(1.0)  # the workers are forked as the first tasks go out, after the "cases (" line
+        workers_seen = max(workers_seen, len(root.children(recursive=True)))
         # negative control of the final check: the mark finds the command's tree (it and two workers) now
         assert proc.pid in alive(mark) and len(alive(mark)) >= 3, alive(mark)
         proc.send_signal(stop)
