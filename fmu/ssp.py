@@ -35,7 +35,7 @@ import numpy as np
 
 from model.errors import InputError
 
-__all__ = ["SspComponent", "SspConnection", "write_ssp", "ssp_variants", "read_parameter_set", "run_fmpy",
+__all__ = ["read_resource", "SspComponent", "SspConnection", "write_ssp", "ssp_variants", "read_parameter_set", "run_fmpy",
            "run_libcosim", "NOMINAL"]
 
 #: Name of the parameter set bound in ``SystemStructure.ssd``.
@@ -106,10 +106,12 @@ def _ssd(name: str, variant: str, components: Sequence[SspComponent], connection
 
 
 def write_ssp(path: str | os.PathLike[str], name: str, components: Sequence[SspComponent],
-              connections: Sequence[SspConnection], *, start: float, stop: float, step: float) -> Path:
+              connections: Sequence[SspConnection], *, start: float, stop: float, step: float,
+              extra: Mapping[str, str] | None = None) -> Path:
     """Write the SSP 1.0 archive ``path`` (``.ssp``) of ``components`` and ``connections``.
 
-    ``start``, ``stop`` and ``step`` (s) are the default experiment and the fixed communication step.
+    ``start``, ``stop`` and ``step`` (s) are the default experiment and the fixed communication step;
+    ``extra`` maps archive paths under ``resources/`` to text files added as they are (the exporter's notes).
     Every component with parameter sets has the same set names, :data:`NOMINAL` among them.
 
     Raises
@@ -147,6 +149,10 @@ def write_ssp(path: str | os.PathLike[str], name: str, components: Sequence[SspC
             zf.write(c.fmu, f"resources/{c.name}.fmu")
             for v, values in c.parameter_sets.items():
                 zf.writestr(f"resources/{c.name}.{v}.ssv", _ssv(f"{c.name} {v}", values))
+        for name, text in (extra or {}).items():
+            if not name.startswith("resources/") or ".." in name:
+                raise InputError(f"expected a path under resources/, got {name!r}", parameter="extra")
+            zf.writestr(name, text)
     tmp.replace(out)
     return out
 
@@ -251,3 +257,9 @@ def run_libcosim(path: str | os.PathLike[str], variant: str, outputs: Sequence[s
             del execution
             del observer
     return out
+
+
+def read_resource(path: str | os.PathLike[str], name: str) -> bytes | None:
+    """The file ``name`` (an archive path) of the SSP ``path``, or None when it has none."""
+    with zipfile.ZipFile(path) as zf:
+        return zf.read(name) if name in zf.namelist() else None
