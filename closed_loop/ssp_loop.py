@@ -33,7 +33,7 @@ import numpy as np
 from control_design.controllers import Controller
 from control_design.reference import Reference
 from fmu.build import build_fmu, export_fmu
-from fmu.ssp import NOMINAL, SspComponent, SspConnection, read_resource, run_fmpy, run_libcosim, write_ssp
+from fmu.ssp import NOMINAL, SspComponent, check_set_name, SspConnection, read_resource, run_fmpy, run_libcosim, write_ssp
 from model.dynamics.parameters import DynamicsParameters
 from model.errors import InputError
 from model.robot import Robot
@@ -83,7 +83,11 @@ def variant_plant(robot: Robot, values: Mapping[str, float]) -> Robot:
     if unknown:
         raise InputError(f"no plant parameter {unknown[0]!r}; expected one of {', '.join(own)}", parameter="variant")
     own.update({k: float(v) for k, v in values.items()})
-    params = DynamicsParameters(robot.parameters.layout, np.array([own[k] for k in robot.parameters.as_dict()]))
+    try:
+        params = DynamicsParameters(robot.parameters.layout, np.array([own[k] for k in robot.parameters.as_dict()]))
+    except InputError as exc:
+        given = ",".join(f"{k}={v:g}" for k, v in values.items())
+        raise InputError(f"{given}: {exc}", parameter="variant") from None
     return robot.with_parameters(params)
 
 
@@ -194,8 +198,10 @@ def export_loop_ssp(robot: Robot, controller: Controller, trajectory: Trajectory
     names = [v.name for v in variants]
     if NOMINAL in names or len(set(names)) != len(names):
         raise InputError(f"expected distinct variant names other than {NOMINAL!r}, got {names}", parameter="variant")
+    check_set_name(*names)  # before the builds
     n = robot.n
     dt = controller.dt
+    ctrl_spec = reference_controller_spec(controller, robot, trajectory)  # a law or trajectory refused first
     sched = Schedule.build(robot, trajectory, dt, rate_hz=controller.rate_hz)
     plant_sets: dict[str, dict[str, float]] = {}
     for name, values in [(NOMINAL, {})] + [(v.name, dict(v.values)) for v in variants]:
@@ -217,7 +223,7 @@ def export_loop_ssp(robot: Robot, controller: Controller, trajectory: Trajectory
         if say is not None:
             say(f"{controller.kind} controller FMU with the reference ({trajectory.path.t_start:g} to "
                 f"{trajectory.path.t_end:g} s)")
-        build_fmu(reference_controller_spec(controller, robot, trajectory), ctrl_fmu)
+        build_fmu(ctrl_spec, ctrl_fmu)
         components = [SspComponent("plant", plant_fmu, tuple(tau), tuple(x), plant_sets),
                       SspComponent("controller", ctrl_fmu, tuple(x), tuple(tau), {})]
         connections = [SspConnection("plant", v, "controller", v) for v in x] + \

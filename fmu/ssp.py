@@ -35,7 +35,7 @@ import numpy as np
 
 from model.errors import InputError
 
-__all__ = ["read_resource", "SspComponent", "SspConnection", "write_ssp", "ssp_variants", "read_parameter_set", "run_fmpy",
+__all__ = ["check_set_name", "read_resource", "SspComponent", "SspConnection", "write_ssp", "ssp_variants", "read_parameter_set", "run_fmpy",
            "run_libcosim", "NOMINAL"]
 
 #: Name of the parameter set bound in ``SystemStructure.ssd``.
@@ -68,6 +68,13 @@ class SspConnection:
     start_connector: str
     end: str
     end_connector: str
+
+
+def check_set_name(*names: str) -> None:
+    """Refuse a parameter set name that is not letters, digits and ``_.=+-`` (it names the set's files)."""
+    for v in names:
+        if not _NAME.match(v):
+            raise InputError(f"expected a name of letters, digits and _.=+-, got {v!r}", parameter="variant")
 
 
 def _ssv(name: str, values: Mapping[str, float]) -> str:
@@ -136,9 +143,7 @@ def write_ssp(path: str | os.PathLike[str], name: str, components: Sequence[SspC
     if any(s != variants for s in sets) or NOMINAL not in variants:
         raise InputError(f"expected the same parameter sets, {NOMINAL!r} among them, in every component, got {sets}",
                          parameter="parameter_sets")
-    for v in variants:
-        if not _NAME.match(v):
-            raise InputError(f"expected a name of letters, digits and _.=+-, got {v!r}", parameter="variant")
+    check_set_name(*variants)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".part")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from typing import Any
 
@@ -20,7 +21,9 @@ def _say(message: str) -> None:
 
 def parse_variant(text: str) -> Any:
     """``--variant NAME=VALUE[,NAME=VALUE...]`` (plant parameters, e.g. ``payload_mass=2``) as a
-    :class:`~closed_loop.ssp_loop.LoopVariant` named by the text itself (spaces removed)."""
+    :class:`~closed_loop.ssp_loop.LoopVariant` named by the text itself, every character but letters, digits and
+    ``_.=+-`` made ``_`` (it names files in the SSP: ``viscous_friction[1]=0.01,payload_mass=1`` is
+    ``viscous_friction_1_=0.01_payload_mass=1``)."""
     from closed_loop.ssp_loop import LoopVariant
 
     values: dict[str, float] = {}
@@ -35,7 +38,7 @@ def parse_variant(text: str) -> Any:
         if name in values:
             raise UsageError(f"--variant: {name!r} given twice in {text!r}")
         values[name] = number
-    return LoopVariant(text.replace(" ", ""), values)
+    return LoopVariant(re.sub(r"[^A-Za-z0-9_.=+-]", "_", text.replace(" ", "")), values)
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
