@@ -45,7 +45,6 @@ _NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
        "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
        "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
 _NAME = re.compile(r"^[A-Za-z0-9_.=+-]+$")
-_NS_PER_S = 1_000_000_000
 
 
 @dataclass(frozen=True)
