@@ -25,6 +25,7 @@ from . import cmd_design, cmd_fmu, cmd_model, cmd_sweep, cmd_track
 from . import cmd_teach, cmd_workspace  # teach page and workspace figure
 from . import cmd_identify  # excitation and identification
 from . import cmd_retime  # time-optimal retiming
+from . import cmd_ssp  # the closed loop as an SSP
 from .args import ArgumentsError, OneLineParser, UsageError, add_no_plots, in_flag_terms
 from .outputs import check_out_dir
 
@@ -65,6 +66,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     cmd_design.register(sub, full=only in (None, "design"))
     cmd_track.register(sub, full=only in (None, "track"))
     cmd_fmu.register(sub)
+    cmd_ssp.register(sub)
     cmd_teach.register(sub)
     cmd_workspace.register(sub)
     cmd_sweep.register(sub, full=only in (None, "sweep"))

@@ -38,10 +38,10 @@ ADDRESS = ("", "\0", "a b", "-1")
 #: The kind of each text argument (by its ``dest``): which hostile values it gets.
 TEXT_KINDS: dict[str, tuple[str, ...]] = {
     "robot": INPUT_PATH, "spec": INPUT_PATH, "fmu": INPUT_PATH, "waypoints": INPUT_PATH, "result": INPUT_PATH,
-    "trajectory": INPUT_PATH, "data": INPUT_PATH,
+    "trajectory": INPUT_PATH, "data": INPUT_PATH, "ssp": INPUT_PATH,
     "velocity_limit": NUMBER, "acceleration_limit": NUMBER,  # one number, or one per joint with commas
     "out": OUT_DIR, "output": OUT_FILE, "toml": OUT_FILE,
-    "controller": NAME, "task": NAME, "platforms": NAME,
+    "controller": NAME, "task": NAME, "platforms": NAME, "variant": NAME,
     "host": ADDRESS, "listen": ADDRESS, "scheduler": ADDRESS,
 }
 
@@ -80,6 +80,8 @@ def _base(command: str, tmp: Path, fmu_file: Path, spec_file: Path, data_file: P
         "track": ["track", "planar2r", "--out", str(tmp / "out"), "--no-plots", "--segment-time=0.2"],
         "export-fmu": ["export-fmu", "planar2r", "-o", str(tmp / "out" / "p.fmu"), "--platforms=host"],
         "validate-fmu": ["validate-fmu", str(fmu_file), "--horizon=0.05", "--no-cosim"],
+        "export-ssp": ["export-ssp", "planar2r", "-o", str(tmp / "out" / "loop.ssp"), "--segment-time=0.2"],
+        "validate-ssp": ["validate-ssp", str(fmu_file)],  # every value of its one argument is hostile
         "teach": ["teach", "planar2r", "--no-browser"],
         "workspace": ["workspace", "planar2r", "-o", str(tmp / "out" / "ws.png"), "--samples=100"],
         "sweep": ["sweep", str(spec_file), "--out", str(tmp / "out"), "--workers=1", "--no-plots"],
@@ -253,6 +255,7 @@ def test_the_matrix_covers_every_command_and_argument():
 def test_a_base_command_line_succeeds(tmp_path, fmu_file, spec_file, data_file, monkeypatch):
     """Negative control: the cheap base command lines themselves run (so a refusal above is the value's)."""
     monkeypatch.chdir(tmp_path)
-    for command in ("info", "track", "validate-fmu", "workspace", "teach", "retime", "excite", "identify"):
+    for command in ("info", "track", "validate-fmu", "workspace", "teach", "retime", "excite", "identify",
+                    "export-ssp"):
         status, err = run_cli(_base(command, tmp_path, fmu_file, spec_file, data_file), monkeypatch)
         assert status == 0 and "Traceback" not in err, (command, err)

@@ -1,0 +1,112 @@
+"""A controller FMU that carries its reference: the law of :mod:`closed_loop.controller_fmu` fed by its own clock.
+
+The controller FMU of :func:`closed_loop.controller_fmu.controller_spec` takes the reference
+``q_ref``, ``qd_ref`` (``qdd_ref``) as inputs. A closed loop handed over as one file (an SSP,
+:mod:`fmu.ssp`) has nobody to feed them, so this spec replaces those inputs by the trajectory's
+piecewise quintic :class:`~model.trajectory.JointPath` evaluated inside the FMU (the same
+arithmetic as :meth:`JointPath.batch`, generated into C) at the control instant ``t_j = t0 + j h``
+(integer j, never a running sum) counted by a sampled discrete state ``k`` (ticked once per period
+``h``, :class:`fmu.variables.DiscreteStates`):
+
+* the output ``tau_m = law(q, qd, ref(t_{max(k-1, 0)}))``: after the ``j``-th ``fmi2DoStep``
+  (``k = j``) it is the law at the instant the step started, ``t_{j-1}``, with the measured state the
+  importer set before that step; before any step (``k = 0``) at ``t_0``.
+
+So an importer that sets the plant state sampled at ``t_j`` before the controller's step from
+``t_j`` and reads ``tau_m`` after it runs the law of ``t_j`` on the state of ``t_j``: the loop
+of a Jacobi master (the torque reaches the plant one period late, :class:`~closed_loop.delay.OnePeriodDelay`).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from control_design.controllers import Controller
+from fmu.variables import DiscreteStates, ModelSpec, Quantity
+from model.errors import InputError
+from model.robot import Robot
+from model.trajectory import JointPath, Trajectory, _basis
+
+from .controller_fmu import controller_spec
+
+__all__ = ["reference_controller_spec", "path_at"]
+
+_REF_GROUPS = ("q_ref", "qd_ref", "qdd_ref")
+
+
+def path_at(path: JointPath, t: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """Position, velocity and acceleration (n x 1 SX each) of ``path`` at the symbolic time ``t`` (s).
+
+    The arithmetic of :meth:`JointPath.batch`: the piece ``k`` with ``breaks[k] <= t < breaks[k+1]``
+    (the last piece at its end), ``s = (t - breaks[k]) / h_k`` clipped to [0, 1]; before the first
+    break the start position at rest, after the last one the end position at rest.
+    """
+    b = path.breaks
+    K = b.size - 1
+    zero = ca.SX.zeros(path.n)
+    q_end, q_start = ca.SX(ca.DM(path.q[-1])), ca.SX(ca.DM(path.q[0]))
+    result = (q_end, zero, zero)  # t > breaks[-1]
+    for k in reversed(range(K)):
+        h = float(b[k + 1] - b[k])
+        s = ca.fmin(ca.fmax((t - float(b[k])) / h, 0.0), 1.0)
+        piece = path._piece(k, h, _basis(s))  # noqa: SLF001 - the path's own arithmetic, written once
+        piece = tuple(ca.SX(p) if not isinstance(p, ca.SX) else p for p in piece)
+        upper = t <= float(b[k + 1]) if k == K - 1 else t < float(b[k + 1])
+        result = tuple(ca.if_else(upper, pc, r) for pc, r in zip(piece, result))
+    before = t < float(b[0])
+    return tuple(ca.if_else(before, s0, r) for s0, r in zip((q_start, zero, zero), result))  # type: ignore[return-value]
+
+
+def reference_controller_spec(controller: Controller, robot: Robot, trajectory: Trajectory, *,
+                              model_identifier: str | None = None) -> ModelSpec:
+    """The spec of a controller FMU running ``controller`` along ``trajectory`` with no reference inputs.
+
+    Inputs ``q[i]``, ``qd[i]``; output ``tau_m[i]`` (N m); parameters those of
+    :func:`~closed_loop.controller_fmu.controller_spec`; one sampled discrete state ``k`` (the
+    count of periods ``1 / rate_hz`` since the start, s); the reference at ``t0 + (k - 1) h``
+    (``t0`` the trajectory's start, s).
+
+    Raises
+    ------
+    model.errors.InputError
+        A trajectory that is not a joint path (a Cartesian one is sampled first), a stateful law
+        ('pid': its integrator would need a second clock).
+    """
+    path = trajectory.path
+    if not isinstance(path, JointPath):
+        raise InputError(f"expected a joint-space trajectory (piecewise quintic), got {type(path).__name__}",
+                         parameter="trajectory")
+    base = controller_spec(controller, robot, model_identifier=model_identifier)
+    if base.discrete is not None:
+        raise InputError(f"the {controller.kind!r} law has its own sampled state; expected a stateless law",
+                         parameter="controller")
+    n = robot.n
+    names = [q.name for q in base.inputs]
+    ref_count = sum(1 for nm in names if nm.split("[")[0] in _REF_GROUPS)
+    groups = [g for g in _REF_GROUPS if f"{g}[1]" in names]
+    measured = base.inputs[ref_count:]
+    x = ca.SX.sym("x", 0)
+    u = ca.SX.sym("u", len(measured))
+    p = ca.SX.sym("p", base.p_start.size)
+    d = ca.SX.sym("d", 1)
+    dt = float(controller.dt)
+    t = path.t_start + ca.fmax(d[0] - 1.0, 0.0) * dt
+    signals = dict(zip(_REF_GROUPS, path_at(path, t)))
+    ref = ca.vertcat(*[signals[g] for g in groups])
+    assert ref.numel() == ref_count == len(groups) * n
+    tau = base.out(x, ca.vertcat(ref, u), p)
+    ode = ca.Function("ode", [x, u, p, d], [ca.SX(0, 1)], ["x", "u", "p", "d"], ["xdot"])
+    out = ca.Function("out", [x, u, p, d], [tau], ["x", "u", "p", "d"], ["y"])
+    tick = ca.Function("tick", [x, u, p, d], [d + 1.0], ["x", "u", "p", "d"], ["d_next"])
+    clock = DiscreteStates((Quantity("k", "1", "control periods since the start (the reference clock), sampled"),),
+                           np.zeros(1), dt, tick)
+    return ModelSpec(
+        model_identifier=base.model_identifier + "_ref",
+        model_name=base.model_name + " with its reference",
+        description=base.description + f"; reference: the trajectory from t0 = {path.t_start:g} s to "
+                    f"{path.t_end:g} s at t0 + (k - 1) h, k the periods counted",
+        ode=ode, out=out, states=(), x_start=np.zeros(0), inputs=tuple(measured),
+        params=base.params, p_start=base.p_start, p_tunable=base.p_tunable, p_min=base.p_min, p_max=base.p_max,
+        outputs=base.outputs, output_state=base.output_state, step=base.step, discrete=clock,
+    )
