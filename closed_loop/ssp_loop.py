@@ -39,6 +39,7 @@ from model.errors import InputError
 from model.robot import Robot
 from model.trajectory import Trajectory
 
+from .delay import OnePeriodDelay
 from .kernel import closed_loop_kernel
 from .reference_controller import reference_controller_spec
 from .result import TrackingResult
@@ -140,19 +141,9 @@ def loop_parts(robot: Robot, spec: LoopSpec) -> tuple[Controller, Trajectory]:
     return design.controller(rate), traj
 
 
-class FmpyStart(Controller):
+class FmpyStart(OnePeriodDelay):
     """``inner`` as FMPy's ``simulate_ssp`` runs a direct-feedthrough controller FMU: one period late, no torque
     over the first period, and at ``t_0`` the law evaluated on ``q = qd = 0`` (FMPy's connector start)."""
-
-    def __init__(self, inner: Controller) -> None:
-        super().__init__(inner.n, inner.rate_hz, inner.G, inner.tau_m_max)
-        self.inner = inner
-        self.kind = inner.kind
-        self._held: np.ndarray | None = None
-
-    def reset(self) -> None:
-        self.inner.reset()
-        self._held = None
 
     def update(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
         if self._held is None:

@@ -173,6 +173,14 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
         files += motion_section(report, out, robot, fmu_results["ct"], "computed torque",
                                 progress=lambda k, total: k % 50 == 0 and progress.note(f"frame {k} of {total}"))
 
+    md, html = _write_report(report, out, files, progress, stream)
+    return DemoResult(out=out, report_md=md, report_html=html, fmu_path=fmu_path, fmu_ok=validation.ok, files=files,
+                      max_error=max_error, fmu_vs_python=fmu_vs_python)
+
+
+def _write_report(report: Report, out: Path, files: list[Path], progress: Progress,
+                  stream: TextIO) -> tuple[Path, Path]:
+    """Write the report (Markdown and HTML) into ``out``, add both to ``files`` and list every file written."""
     progress.step("writing the report")
     md, html = report.write(out)
     files += [md, html]
@@ -180,8 +188,7 @@ def run_demo(robot_name: str = "scara", out: str | Path = "out", *, bandwidth: f
     print(f"wrote {len(files)} files under {out}/:", file=stream)
     for path in files:
         print(f"  {path}", file=stream)
-    return DemoResult(out=out, report_md=md, report_html=html, fmu_path=fmu_path, fmu_ok=validation.ok, files=files,
-                      max_error=max_error, fmu_vs_python=fmu_vs_python)
+    return md, html
 
 
 def _drive_train_demo(report: Report, out: Path, robot: Any, files: list[Path], progress: Progress, *, plots: bool,
@@ -196,12 +203,6 @@ def _drive_train_demo(report: Report, out: Path, robot: Any, files: list[Path], 
     report.text("Not in this report for a robot with drive trains: the plant FMU and the closed loop through it, a "
                 "robustness sweep (both take drive trains: `manip export-fmu`, `manip sweep` with "
                 "`controller = \"cascade\"`) and the identification (it takes rigid arms so far).")
-    progress.step("writing the report")
-    md, html = report.write(out)
-    files += [md, html]
-    progress.step(f"done: open {html}")
-    print(f"wrote {len(files)} files under {out}/:", file=stream)
-    for path in files:
-        print(f"  {path}", file=stream)
+    md, html = _write_report(report, out, files, progress, stream)
     return DemoResult(out=out, report_md=md, report_html=html, fmu_path=Path(), fmu_ok=False, files=files,
                       max_error={"cascade": result.metrics().max_error.tolist()})
