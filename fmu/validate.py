@@ -47,6 +47,7 @@ import numpy as np
 from model.errors import InputError
 
 from .archive import check_fmu_archive, model_description_xml
+from .roundtrip import StateCalls, cs_roundtrip, me_roundtrip
 from .check_results import FD_LADDER, RoundTrip
 from .variables import substeps
 from model.limits import MAX_SAMPLES
@@ -490,52 +491,27 @@ def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], 
                 out[k - k0] = s.getReal(vout)
             return out
 
-        a = _initialised(fmu_path, unzip, "roundtrip_a")
-        run(a, 0, steps_before)
-        state = a.getFMUstate()
-        data = a.serializeFMUstate(state)
-        first = run(a, steps_before, steps_after)
-        a.setFMUstate(state)
-        again = run(a, steps_before, steps_after)
-        a.freeFMUstate(state)
-
-        b = _initialised(fmu_path, unzip, "roundtrip_b")
-        state_b = b.deSerializeFMUstate(data)
-        b.setFMUstate(state_b)
-        restored = run(b, steps_before, steps_after)
-        b.freeFMUstate(state_b)
-        for s in (a, b):
-            s.terminate()
-            s.freeInstance()
-
+        get_set, deserialized, size = cs_roundtrip(
+            lambda name: (s := _initialised(fmu_path, unzip, name), _calls2(s)), run, steps_before, steps_after)
         me_same = _me_roundtrip(fmu_path, unzip, md)
     finally:
         shutil.rmtree(unzip, ignore_errors=True)
-    return RoundTrip(steps_before, steps_after, len(data),
-                     first.tobytes() == again.tobytes(), first.tobytes() == restored.tobytes(), me_same)
+    return RoundTrip(steps_before, steps_after, size, get_set, deserialized, me_same)
+
+
+def _calls2(m: Any, nx: int = 0) -> StateCalls:
+    """The FMI 2.0 spellings of the round trip's calls on instance ``m`` (``nx`` states for Model Exchange)."""
+    def end() -> None:
+        m.terminate()
+        m.freeInstance()
+
+    return StateCalls(m.getFMUstate, m.setFMUstate, m.serializeFMUstate, m.deSerializeFMUstate, m.freeFMUstate, end,
+                      lambda: _states(m, nx), lambda x: _set_states(m, x), lambda: _derivatives(m, nx))
 
 
 def _me_roundtrip(fmu_path: str | os.PathLike[str], unzip: str, md: Any) -> bool:
-    nx = len(md.derivatives)
     m = _initialised(fmu_path, unzip, "roundtrip_me", kind="me")
-    rng = np.random.default_rng(1)
-    x1 = _states(m, nx) + 0.1 * rng.standard_normal(nx)
-    _set_states(m, x1)
-    d1 = _derivatives(m, nx)
-    state = m.getFMUstate()
-    data = m.serializeFMUstate(state)
-    _set_states(m, x1 + 1.0)
-    m.setFMUstate(state)
-    d2 = _derivatives(m, nx)
-    _set_states(m, x1 - 1.0)
-    state2 = m.deSerializeFMUstate(data)
-    m.setFMUstate(state2)
-    d3 = _derivatives(m, nx)
-    m.freeFMUstate(state)
-    m.freeFMUstate(state2)
-    m.terminate()
-    m.freeInstance()
-    return d1.tobytes() == d2.tobytes() == d3.tobytes()
+    return me_roundtrip(_calls2(m, len(md.derivatives)))
 
 
 def _states(m: Any, nx: int) -> np.ndarray:

@@ -29,6 +29,7 @@ import numpy as np
 from model.errors import InputError
 
 from .archive import check_fmu_archive
+from .roundtrip import StateCalls, cs_roundtrip, me_roundtrip
 from .check_results import FD_LADDER, RoundTrip
 
 __all__ = ["state_roundtrip3", "directional_derivative_error3"]
@@ -99,28 +100,12 @@ def state_roundtrip3(fmu_path: str | os.PathLike[str], inputs: Callable[[float],
                 out[k - k0] = np.array(s.getFloat64(vout, sum(out_sizes)))[out_where]
             return out
 
-        _, a = _new(fmu_path, unzip, "roundtrip3_a", "cs")
-        run(a, 0, steps_before)
-        state = a.getFMUState()
-        data = a.serializeFMUState(state)
-        first = run(a, steps_before, steps_after)
-        a.setFMUState(state)
-        again = run(a, steps_before, steps_after)
-        a.freeFMUState(state)
-
-        _, b = _new(fmu_path, unzip, "roundtrip3_b", "cs")
-        state_b = b.deserializeFMUState(data)
-        b.setFMUState(state_b)
-        restored = run(b, steps_before, steps_after)
-        b.freeFMUState(state_b)
-        for s in (a, b):
-            s.terminate()
-            s.freeInstance()
+        get_set, deserialized, size = cs_roundtrip(
+            lambda name: (s := _new(fmu_path, unzip, name + "3", "cs")[1], _calls3(s)), run, steps_before, steps_after)
         me_same = _me_roundtrip3(fmu_path, unzip)
     finally:
         shutil.rmtree(unzip, ignore_errors=True)
-    return RoundTrip(steps_before, steps_after, len(data),
-                     first.tobytes() == again.tobytes(), first.tobytes() == restored.tobytes(), me_same)
+    return RoundTrip(steps_before, steps_after, size, get_set, deserialized, me_same)
 
 
 def _nx(md: Any) -> int:
@@ -145,27 +130,19 @@ def _dx(m: Any, nx: int) -> np.ndarray:
     return np.array(buf[:])
 
 
+def _calls3(m: Any, nx: int = 0) -> StateCalls:
+    """The FMI 3.0 spellings of the round trip's calls on instance ``m`` (``nx`` states for Model Exchange)."""
+    def end() -> None:
+        m.terminate()
+        m.freeInstance()
+
+    return StateCalls(m.getFMUState, m.setFMUState, m.serializeFMUState, m.deserializeFMUState, m.freeFMUState, end,
+                      lambda: _get_x(m, nx), lambda x: _set_x(m, x), lambda: _dx(m, nx))
+
+
 def _me_roundtrip3(fmu_path: str | os.PathLike[str], unzip: str) -> bool:
     md, m = _new(fmu_path, unzip, "roundtrip3_me", "me")
-    nx = _nx(md)
-    rng = np.random.default_rng(1)
-    x1 = _get_x(m, nx) + 0.1 * rng.standard_normal(nx)
-    _set_x(m, x1)
-    d1 = _dx(m, nx)
-    state = m.getFMUState()
-    data = m.serializeFMUState(state)
-    _set_x(m, x1 + 1.0)
-    m.setFMUState(state)
-    d2 = _dx(m, nx)
-    _set_x(m, x1 - 1.0)
-    state2 = m.deserializeFMUState(data)
-    m.setFMUState(state2)
-    d3 = _dx(m, nx)
-    m.freeFMUState(state)
-    m.freeFMUState(state2)
-    m.terminate()
-    m.freeInstance()
-    return d1.tobytes() == d2.tobytes() == d3.tobytes()
+    return me_roundtrip(_calls3(m, _nx(md)))
 
 
 def directional_derivative_error3(fmu_path: str | os.PathLike[str], seed: int = 7,
