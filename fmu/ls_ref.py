@@ -182,8 +182,13 @@ def experiment_files(robot_name: str, t: np.ndarray, t_switch: np.ndarray, tau_s
             or n < 1 or X.shape[1] < 2 * n):
         raise InputError(f"expected increasing times, one state row per time and n inputs with at least 2n states, "
                          f"got {t.shape}, {X.shape} and {tau_switch.shape}", parameter="t")
-    if X.shape[1] > 2 * n:  # a drive-train plant: it starts (as its FMU does) in the static equilibrium
+    drive_trains = X.shape[1] > 2 * n
+    if drive_trains:  # a drive-train plant: it starts (as its FMU does) in the static equilibrium
         description += "; from the static equilibrium of the drive trains (the FMU's start values)"
+    if drive_trains and not np.all(np.isfinite(X)):
+        raise InputError(f"the plant's reference run of {robot_name} diverged within {t[-1]:g} s: its drive "
+                         "trains need a shorter internal step (export without a step for the default, "
+                         "fmu.build.default_step)", parameter="step")
     X = X[:, :2 * n]
     if not np.all(np.isfinite(X)):
         raise InputError(f"the plant's reference run of {robot_name} diverged within {t[-1]:g} s", parameter="X")

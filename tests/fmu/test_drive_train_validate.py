@@ -149,3 +149,15 @@ def test_validate_fmu_passes_on_the_drive_train_fmu(r3_default):
     for expected in ("FMI-LS-REF replay", "Co-Simulation q", "Co-Simulation = plant q", "Model Exchange qd",
                      "FMU state round trips", "directional derivatives"):
         assert expected in names
+
+
+def test_a_step_too_long_for_the_drive_trains_is_a_step_error(tmp_path):
+    """1 ms: RK4 on the r3's gear springs (h w ~ 7.5) diverges; the export refuses it naming the step, before
+    compiling anything."""
+    import fmu
+    from model.errors import InputError
+
+    with pytest.raises(InputError, match="drive trains need a shorter internal step") as info:
+        fmu.export_fmu(load_robot("manutec_r3"), tmp_path / "r3.fmu", step=1e-3, platforms="linux64")
+    assert info.value.parameter == "step"
+    assert not (tmp_path / "r3.fmu").exists()
