@@ -51,6 +51,8 @@ from .variables import ModelSpec, VariableTable, build_table, spec_from_plant, t
 
 __all__ = [
     "FmuBuildError",
+    "DEFAULT_STEP",
+    "default_step",
     "tool_version",
     "C_DIR",
     "CFLAGS",
@@ -123,7 +125,21 @@ def _say(progress: Progress | None, message: str) -> None:
 
 # ------------------------------------------------------------------ public API
 
-def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float = 1e-3,
+#: Default internal step of a rigid arm's FMU, s (a drive train's: :func:`default_step`).
+DEFAULT_STEP = 1e-3
+
+
+def default_step(robot: Any) -> float:
+    """The internal step (s) of ``robot``'s FMU when none is asked for: :data:`DEFAULT_STEP`, or for a robot
+    with drive trains that divided by :func:`model.drive_train.drive_substeps` (RK4 within a quarter of the
+    drive trains' fastest rate, the Python loop's rule: 1/30 ms for the r3; 1 ms diverges)."""
+    from model.drive_train import drive_substeps
+
+    k = drive_substeps(robot.description, DEFAULT_STEP)
+    return DEFAULT_STEP if k is None else DEFAULT_STEP / k
+
+
+def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float | None = None,
                motor_model: str | None = None, fmi_version: int = 2,
                platforms: str | Sequence[str | Platform] | None = None, progress: Progress | None = None) -> Path:
     """Export a robot, as it is, as an FMI 2.0 or 3.0 FMU for Model Exchange and Co-Simulation.
@@ -142,6 +158,7 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     step
         Internal step of the co-simulation integrator (RK4), s; the FMU's
         fixed parameter ``internal_step`` and its default experiment step.
+        Default :func:`default_step` (1 ms, shorter for drive trains).
     motor_model
         For a name or path: ``"reflected"`` (default) or ``"full"`` (see :class:`model.Robot`). For a
         Robot it may only repeat the robot's own (a Robot is exported as it is).
@@ -187,6 +204,8 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
 
     from .export_checks import check_inertia
 
+    if step is None:
+        step = default_step(robot)
     check_inertia(robot)  # a singular B(q) is refused here, naming the joint, not at the importer's first call
     _say(progress, f"building the symbolic plant of {robot.name} ({robot.n} joints, {robot.motor_model} motors)")
     plant = build_plant(robot)  # everything the FMU is built from: the robot as it is, its parameters, its modes

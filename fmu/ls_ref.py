@@ -15,7 +15,10 @@ Every plant FMU exported by :func:`fmu.build.export_fmu` carries, in
 * ``tracking_in.csv``: the motor torques ``tau_m`` (N m), piecewise constant,
   each switch written twice (value before, value after: the FMI cross-check and
   FMPy convention for a step), ``tracking_ref.csv``: ``q`` (rad or m) and ``qd``
-  at every communication point.
+  at every communication point (a robot with drive trains: the torque demands of its
+  inputs ``tau_m``, through a current loop where it has one, and the links' ``q`` and
+  ``qd``, the first 2n of its states; the run starts, as the FMU does, in the static
+  equilibrium of the drive trains).
 
 The CSV files follow the FMI cross-check / FMPy convention: a ``"time"``
 column first, one column per variable by its FMI name, numbers as Python's
@@ -165,19 +168,30 @@ def experiment_files(robot_name: str, t: np.ndarray, t_switch: np.ndarray, tau_s
                      X: np.ndarray, fmi_version: int, description: str) -> dict[str, str]:
     """The FMI-LS-REF files of a plant FMU: archive path -> text.
 
-    ``t`` (K + 1,) are the communication points t0 + k h (s), ``X`` (K + 1, 2n) the reference
-    states ``[q, qd]`` there; the motor torques ``tau_switch[i]`` (N m) hold on
-    ``[t_switch[i], t_switch[i + 1])``, the last one to ``t[-1]``. ``description`` says what the
-    torques are. Raises InputError when the reference is not finite or the grid is not increasing.
+    ``t`` (K + 1,) are the communication points t0 + k h (s), ``X`` (K + 1, nx) the plant's
+    states there, the links' ``[q, qd]`` first (a drive-train plant has more; only ``q`` and ``qd``
+    are the reference); the FMU's n inputs ``tau_switch[i]`` (N m: motor torques, or a current
+    loop's torque demand) hold on ``[t_switch[i], t_switch[i + 1])``, the last one to ``t[-1]``.
+    ``description`` says what the torques are. Raises InputError when the reference is not finite
+    or the grid is not increasing.
     """
     t, X = np.asarray(t, dtype=float), np.asarray(X, dtype=float)
     t_switch, tau_switch = np.asarray(t_switch, dtype=float), np.asarray(tau_switch, dtype=float)
-    if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0) or X.shape[0] != t.size or X.shape[1] % 2:
-        raise InputError(f"expected increasing times and one state row per time, got {t.shape} and {X.shape}",
-                         parameter="t")
+    n = tau_switch.shape[1] if tau_switch.ndim == 2 else -1
+    if (t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0) or X.ndim != 2 or X.shape[0] != t.size
+            or n < 1 or X.shape[1] < 2 * n):
+        raise InputError(f"expected increasing times, one state row per time and n inputs with at least 2n states, "
+                         f"got {t.shape}, {X.shape} and {tau_switch.shape}", parameter="t")
+    drive_trains = X.shape[1] > 2 * n
+    if drive_trains:  # a drive-train plant: it starts (as its FMU does) in the static equilibrium
+        description += "; from the static equilibrium of the drive trains (the FMU's start values)"
+    if drive_trains and not np.all(np.isfinite(X)):
+        raise InputError(f"the plant's reference run of {robot_name} diverged within {t[-1]:g} s: its drive "
+                         "trains need a shorter internal step (export without a step for the default, "
+                         "fmu.build.default_step)", parameter="step")
+    X = X[:, :2 * n]
     if not np.all(np.isfinite(X)):
         raise InputError(f"the plant's reference run of {robot_name} diverged within {t[-1]:g} s", parameter="X")
-    n = X.shape[1] // 2
     step = float(t[1] - t[0])
     keep = t_switch < t[-1] - 0.5 * step
     t_sw, tau_sw = t_switch[keep], tau_switch[keep]

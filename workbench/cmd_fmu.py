@@ -62,8 +62,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                                  "Co-Simulation)")
     p.add_argument("robot", help="built-in name or TOML file")
     p.add_argument("-o", "--output", required=True, metavar="FILE.fmu", help="the FMU to write")
-    p.add_argument("--step", type=_internal_step, default=1e-3, metavar="H",
-                   help="internal step of the co-simulation integrator (RK4), s (default 0.001, at least 1e-6)")
+    p.add_argument("--step", type=_internal_step, default=None, metavar="H",
+                   help="internal step of the co-simulation integrator (RK4), s (default 0.001, shorter for a robot "
+                        "with drive trains: 1/30 ms for manutec_r3; at least 1e-6)")
     p.add_argument("--motor-model", choices=("reflected", "full"), default="reflected",
                    help="motor model of the dynamics (default reflected)")
     p.add_argument("--platforms", metavar="LIST",
