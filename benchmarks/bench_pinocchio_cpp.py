@@ -179,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
         f"`python -m benchmarks.bench_pinocchio_cpp -N {args.N} --repeat {args.repeat}` on {_versions()}. "
         "Harness `benchmarks/pinocchio_cpp/harness.cpp` compiled with g++ -O3 against the pip wheel's Pinocchio "
         "headers (template algorithms compiled here) and Debian's Eigen; our library as `manip build` makes it "
-        "(its own -O2/-Os policy, `-ffp-contract=off`). Same URDF (exported by `model.urdf_export`), same random "
+        "(its own -O1/-O2 policy, `-ffp-contract=off`). Same URDF (exported by `model.urdf_export`), same random "
         "states, friction 0 in our parameters; ns per state, best of the repeats, ours and Pinocchio's timed alternately. "
         f"Load average (1, 5, 15 min) before {tuple(round(x, 2) for x in load_before)}, after "
         f"{tuple(round(x, 2) for x in load_after)}: the machine was shared, so compare the ratios (same run, "
