@@ -177,9 +177,11 @@ def directional_derivative_error3(fmu_path: str | os.PathLike[str], seed: int = 
             m.setFloat64([v.valueReference], list(0.05 * rng.standard_normal(size[v.valueReference])))
 
         def set_param(vr: int, values: np.ndarray) -> None:
+            # as the FMI 2.0 check: no fmi3UpdateDiscreteStates, so the friction modes stay those of the point
+            # (an update at this random state may switch a mode and project a speed, which moves the point
+            # under the differences: the panda's payload column then missed by 1.5e-3)
             m.enterEventMode()
             m.setFloat64([vr], [float(a) for a in values])
-            m.updateDiscreteStates()
             m.enterContinuousTimeMode()
 
         for v in params:  # move parameters that sit on a bound (no payload, no Coulomb friction) inside their range
