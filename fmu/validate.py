@@ -48,7 +48,7 @@ from model.errors import InputError
 
 from .archive import check_fmu_archive, model_description_xml
 from .roundtrip import StateCalls, cs_roundtrip, me_roundtrip
-from .check_results import FD_LADDER, RoundTrip
+from .check_results import RoundTrip, fd_mismatch
 from .variables import substeps
 from model.limits import MAX_SAMPLES
 
@@ -568,7 +568,7 @@ def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7
     Knowns: every state, every input and every tunable parameter; the point is
     a seeded random perturbation of the start state with random inputs; the
     finite differences are central at ``h`` and ``2 h``, Richardson-combined
-    (error O(h^4)), for ``h = rel_step * max(1, |value|) * 10^-k``, k < :data:`FD_LADDER`;
+    (error O(h^4)), for ``h = rel_step * max(1, |value|) * 10^-k``, k < :data:`fmu.check_results.FD_LADDER`;
     each entry keeps its best rung.
     Returns the error and the number of Jacobian entries compared.
     """
@@ -634,15 +634,7 @@ def directional_derivative_error(fmu_path: str | os.PathLike[str], seed: int = 7
                     set_param(known.valueReference, base + step)
                 return evaluate()
 
-            # Richardson-combined central differences (error O(h^4)) on a ladder of steps; AD is exact,
-            # so the best rung (truncation against rounding) is the finite differences' own accuracy
-            best = np.full(ad.shape, np.inf)
-            for k in range(FD_LADDER):
-                h = scale * rel_step * 10.0 ** -k
-                fd_h = (at(h) - at(-h)) / (2.0 * h)
-                fd_2h = (at(2.0 * h) - at(-2.0 * h)) / (4.0 * h)
-                fd = (4.0 * fd_h - fd_2h) / 3.0
-                best = np.minimum(best, np.abs(ad - fd) / (1.0 + np.abs(fd)))
+            best = fd_mismatch(ad, at, scale, rel_step)
             if j < nx:
                 _set_states(m, x)
             elif known in inputs:

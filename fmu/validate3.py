@@ -30,7 +30,7 @@ from model.errors import InputError
 
 from .archive import check_fmu_archive
 from .roundtrip import StateCalls, cs_roundtrip, me_roundtrip
-from .check_results import FD_LADDER, RoundTrip
+from .check_results import RoundTrip, fd_mismatch
 
 __all__ = ["state_roundtrip3", "directional_derivative_error3"]
 
@@ -230,13 +230,7 @@ def directional_derivative_error3(fmu_path: str | os.PathLike[str], seed: int = 
                     put(values)
                     return evaluate()
 
-                best = np.full(ad.shape, np.inf)
-                for k in range(FD_LADDER):
-                    h = scale * rel_step * 10.0 ** -k
-                    fd_h = (at(h) - at(-h)) / (2.0 * h)
-                    fd_2h = (at(2.0 * h) - at(-2.0 * h)) / (4.0 * h)
-                    fd = (4.0 * fd_h - fd_2h) / 3.0
-                    best = np.minimum(best, np.abs(ad - fd) / (1.0 + np.abs(fd)))
+                best = fd_mismatch(ad, at, scale, rel_step)
                 put(base_all)
                 worst = max(worst, float(np.max(best)))
                 count += ad.size
