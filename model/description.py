@@ -523,20 +523,9 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
             if not isinstance(data["name"], str):
                 raise w.fail(i, "name", data["name"], "a string")
             kw["name"] = data["name"]
-    if "torque_limit" in data:
-        with w.collect():
-            limit = _number(w, i, "torque_limit", data["torque_limit"])
-            if limit <= 0:
-                raise w.fail(i, "torque_limit", data["torque_limit"], "a motor torque rating > 0 (N m)")
-            kw["torque_limit"] = limit
-    for key, what in (("velocity_limit", "a joint speed limit > 0 (rad/s or m/s)"),
-                      ("acceleration_limit", "a joint acceleration limit > 0 (rad/s^2 or m/s^2)")):
-        if key in data:
-            with w.collect():
-                value = _number(w, i, key, data[key])
-                if value <= 0:
-                    raise w.fail(i, key, data[key], what)
-                kw[key] = value
+    _positive_keys(w, i, data, kw, (("torque_limit", "a motor torque rating > 0 (N m)"),
+                                    ("velocity_limit", "a joint speed limit > 0 (rad/s or m/s)"),
+                                    ("acceleration_limit", "a joint acceleration limit > 0 (rad/s^2 or m/s^2)")))
     _drive_train(w, i, data, kw)
     kw["friction_source"] = tuple(FROM_FILE if key in data else FROM_DEFAULT
                                   for key in ("viscous_friction", "coulomb_friction"))
@@ -548,19 +537,25 @@ def _link(w: _Where, i: int, data: Any) -> LinkDescription | None:
     return None if len(w.problems) > start else LinkDescription(**kw)
 
 
-def _drive_train(w: _Where, i: int, data: Mapping[str, Any], kw: dict[str, Any]) -> None:
-    """The drive-train keys of link ``i`` into ``kw`` (each bad one recorded in ``w``)."""
-    for key, what in (("gear_stiffness", "a gear stiffness > 0 (N m/rad, motor side)"),
-                      ("torque_constant", "a torque constant > 0 (N m/A)"),
-                      ("current_bandwidth", "a current-loop bandwidth > 0 (rad/s)"),
-                      ("current_damping", "a current-loop damping ratio > 0"),
-                      ("armature_resistance", "an armature resistance > 0 (Ohm)")):
+def _positive_keys(w: _Where, i: int, data: Mapping[str, Any], kw: dict[str, Any],
+                   keys: tuple[tuple[str, str], ...]) -> None:
+    """Each ``(key, what)`` of link ``i`` that ``data`` states: a number > 0 into ``kw``, else a problem in ``w``."""
+    for key, what in keys:
         if key in data:
             with w.collect():
                 value = _number(w, i, key, data[key])
                 if value <= 0:
                     raise w.fail(i, key, data[key], what)
                 kw[key] = value
+
+
+def _drive_train(w: _Where, i: int, data: Mapping[str, Any], kw: dict[str, Any]) -> None:
+    """The drive-train keys of link ``i`` into ``kw`` (each bad one recorded in ``w``)."""
+    _positive_keys(w, i, data, kw, (("gear_stiffness", "a gear stiffness > 0 (N m/rad, motor side)"),
+                                    ("torque_constant", "a torque constant > 0 (N m/A)"),
+                                    ("current_bandwidth", "a current-loop bandwidth > 0 (rad/s)"),
+                                    ("current_damping", "a current-loop damping ratio > 0"),
+                                    ("armature_resistance", "an armature resistance > 0 (Ohm)")))
     if "gear_damping" in data:
         with w.collect():
             kw["gear_damping"] = _number(w, i, "gear_damping", data["gear_damping"], nonneg=True)
