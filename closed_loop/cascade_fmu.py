@@ -20,7 +20,6 @@ discrete state  ``x_pi[i]`` (rad/s): the integral of the speed error over ``ti``
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 
 import casadi as ca
@@ -28,7 +27,7 @@ import numpy as np
 
 from control_design.cascade import CascadeController, cascade_law
 from fmu.build import build_fmu
-from fmu.variables import DiscreteStates, ModelSpec, Quantity
+from fmu.variables import DiscreteStates, ModelSpec, Quantity, fmu_identifier
 from model.robot import Robot
 
 __all__ = ["cascade_spec", "export_cascade_fmu"]
@@ -70,9 +69,7 @@ def cascade_spec(controller: CascadeController, robot: Robot, *, model_identifie
     discrete = DiscreteStates(states, np.asarray(controller.x, dtype=float).copy(), controller.dt, tick)
     outputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque demand of joint {i + 1} ({names[i]})")
                     for i in idx)
-    ident = model_identifier or re.sub(r"\W", "_", f"{robot.name}_cascade_controller")
-    if ident[0].isdigit():
-        ident = "m_" + ident
+    ident = fmu_identifier(model_identifier, f"{robot.name}_cascade_controller")
     return ModelSpec(
         model_identifier=ident, model_name=f"{robot.name} cascade controller",
         description=(f"P-PI cascade of {robot.name} on the motor side, sampled at {controller.rate_hz:g} Hz: "

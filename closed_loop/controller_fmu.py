@@ -57,7 +57,7 @@ from control_design.design import RobotDesign
 from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
 from fmu.build import build_fmu
-from fmu.variables import DiscreteStates, ModelSpec, Quantity
+from fmu.variables import DiscreteStates, ModelSpec, Quantity, fmu_identifier
 from model.robot import Robot
 from model.errors import InputError
 
@@ -243,9 +243,7 @@ def controller_spec(controller: Controller, robot: Robot, *, model_identifier: s
         out = ca.Function("out", [x, u, p], [ca.densify(y)], ["x", "u", "p"], ["y"])
     outputs = tuple(Quantity(f"tau_m[{i + 1}]", "N.m", f"motor torque of joint {i + 1} ({names[i]}), saturated")
                     for i in idx)
-    ident = model_identifier or re.sub(r"\W", "_", f"{robot.name}_{kind}_controller")
-    if ident[0].isdigit():
-        ident = "m_" + ident
+    ident = fmu_identifier(model_identifier, f"{robot.name}_{kind}_controller")
     return ModelSpec(
         model_identifier=ident,
         model_name=f"{robot.name} {kind} controller",

@@ -41,6 +41,7 @@ __all__ = [
     "MAX_SUBSTEPS",
     "SUBSTEP_RTOL",
     "substeps",
+    "fmu_identifier",
     "Quantity",
     "ModelSpec",
     "DiscreteStates",
@@ -684,9 +685,7 @@ def spec_from_plant(plant: Any, step: float, model_identifier: str | None = None
     y_probe = np.asarray(plant.out(x_probe, np.zeros(n), plant.param_defaults), dtype=float).reshape(-1)
     if not np.array_equal(y_probe[:2 * n], x_probe[:2 * n]):
         raise InputError("expected the first 2n outputs to be the state [q; qd] itself", parameter="plant.out")
-    identifier = model_identifier or robot.description.identifier
-    if identifier[0].isdigit():
-        identifier = "m_" + identifier
+    identifier = fmu_identifier(model_identifier or robot.description.identifier, robot.name)
     return ModelSpec(
         model_identifier=identifier,
         model_name=robot.name,
@@ -774,6 +773,13 @@ def _c_array(values: Any) -> str:
 
 def _c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def fmu_identifier(given: str | None, name: str) -> str:
+    """An FMU's model identifier (its C prefix): ``given``, else ``name`` with every non-word character made
+    '_'; either prefixed with 'm_' when it would start with a digit."""
+    ident = given or re.sub(r"\W", "_", name)
+    return "m_" + ident if ident[0].isdigit() else ident
 
 
 def _c_identifier(name: str) -> str:
