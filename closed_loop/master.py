@@ -47,7 +47,7 @@ from control_design.reference import Reference
 from fmu.archive import check_fmu_archive
 from fmu.build import build_fmu, export_fmu
 from fmu.cosim import CosimError, add_slave, last_error
-from fmu.validate import RobotNotReloadableError, reload_fmu_robot
+from fmu.robot_resource import RobotNotReloadableError, reload_fmu_robot
 from model.errors import InputError
 from model.robot import Robot
 from model.trajectory import Trajectory

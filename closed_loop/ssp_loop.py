@@ -267,7 +267,7 @@ def validate_loop_ssp(path: str | os.PathLike[str], *, importers: tuple[str, ...
     model.errors.InputError
         Not an SSP written by :func:`export_loop_ssp` (no :data:`NOTES`, no plant FMU recording its robot).
     """
-    from fmu.validate import reload_fmu_robot
+    from fmu.robot_resource import reload_fmu_robot
 
     src = Path(path)
     if not src.is_file() or not zipfile.is_zipfile(src):

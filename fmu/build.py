@@ -147,7 +147,7 @@ def export_fmu(robot_or_name: Any, path: str | os.PathLike[str], *, step: float 
     The FMU is built from the robot's plant (:func:`model.plant.build_plant`) and nothing else: its
     motor model is the robot's, its parameters (payload, friction, gravity) are the FMU parameters'
     start values, and the robot is recorded whole in ``resources/robot.json``, so that reading the
-    FMU back (:func:`fmu.validate.reload_fmu_robot`) gives a robot equal to ``robot``.
+    FMU back (:func:`fmu.robot_resource.reload_fmu_robot`) gives a robot equal to ``robot``.
 
     Parameters
     ----------

@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import zipfile
 from pathlib import Path
 from typing import Any
 from model.errors import InputError
 
-__all__ = ["ROBOT_RESOURCE", "description_to_json", "description_from_json", "read_robot", "read_robot_resource",
-           "robot_from_json", "robot_to_json"]
+__all__ = ["ROBOT_RESOURCE", "RobotNotReloadableError", "description_to_json", "description_from_json", "fmu_robot",
+           "fmu_robot_digest", "read_robot", "read_robot_resource", "reload_fmu_robot", "robot_from_json",
+           "robot_to_json"]
 
 #: Where the description lives inside the FMU.
 ROBOT_RESOURCE = "resources/robot.json"
@@ -171,3 +173,73 @@ def _resource_text(fmu_path: str | Path) -> str | None:
             return zf.read(ROBOT_RESOURCE).decode()
         except UnicodeDecodeError as exc:
             raise RobotDescriptionError(f"{where}: not UTF-8 text (byte {exc.start})") from None
+
+
+# ------------------------------------------------- the robot an FMU records
+
+def _robot_node(fmu_path: str | os.PathLike[str]) -> Any:
+    from defusedxml.ElementTree import fromstring  # no entities, no external references
+
+    from .archive import model_description_xml
+
+    root = fromstring(model_description_xml(fmu_path))
+    node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")  # FMI 2.0
+    if node is None:
+        node = root.find("./Annotations/Annotation[@type='manipulator-workbench']/Robot")  # FMI 3.0
+    if node is None or not node.get("name"):
+        return None
+    return node
+
+
+def fmu_robot(fmu_path: str | os.PathLike[str]) -> tuple[str, str] | None:
+    """``(robot, motor_model)`` recorded in the FMU's VendorAnnotations, or None for other FMUs."""
+    node = _robot_node(fmu_path)
+    if node is None:
+        return None
+    return node.get("name", ""), node.get("motorModel", "reflected")
+
+
+def fmu_robot_digest(fmu_path: str | os.PathLike[str]) -> str | None:
+    """The description digest recorded with the robot (``RobotDescription.digest()``), or None."""
+    node = _robot_node(fmu_path)
+    return None if node is None else node.get("digest") or None
+
+
+class RobotNotReloadableError(InputError):
+    """The robot recorded in an FMU does not load again as the robot the FMU was built from."""
+
+
+def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
+    """The robot the FMU was built from, from the FMU alone; None if it records none.
+
+    The robot embedded as ``resources/robot.json`` is loaded: its description, motor model and
+    parameters (:func:`fmu.robot_resource.read_robot`), equal to the exported robot (FMUs exported
+    before the resource: the built-in robot of the recorded name; before the parameters were
+    embedded: the description's parameters). The description's digest must equal the one recorded
+    in the VendorAnnotations.
+
+    Raises
+    ------
+    RobotNotReloadableError
+        The digests differ (the resource was edited, or an older FMU of a
+        modified robot that kept a built-in name).
+    model.RobotDescriptionError
+        The embedded description does not load, or (older FMUs) the name is
+        not a built-in robot.
+    """
+    from model import Robot
+    from model.loading import load_description
+
+    recorded = fmu_robot(fmu_path)
+    if recorded is None:
+        return None
+    name, motor_model = recorded
+    robot = read_robot(fmu_path, motor_model)
+    if robot is None:
+        robot = Robot(load_description(name), motor_model=motor_model)
+    digest = fmu_robot_digest(fmu_path)
+    if digest is not None and robot.description.digest() != digest:
+        raise RobotNotReloadableError(
+            f"the FMU was built from a modified description (digest {digest[:16]}), not the one {name!r} "
+            f"loads now (digest {robot.description.digest()[:16]})")
+    return robot

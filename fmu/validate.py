@@ -36,7 +36,6 @@ import re
 import shutil
 import subprocess
 import tempfile
-import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,6 +49,7 @@ from .archive import check_fmu_archive, model_description_xml
 from .roundtrip import StateCalls, cs_roundtrip, me_roundtrip
 from .check_results import RoundTrip, fd_mismatch
 from .variables import substeps
+from .robot_resource import RobotNotReloadableError, fmu_robot, reload_fmu_robot
 from model.limits import MAX_SAMPLES
 
 __all__ = [
@@ -70,10 +70,6 @@ __all__ = [
     "model_description_xml",
     "model_description_problems",
     "binary_problems",
-    "fmu_robot",
-    "fmu_robot_digest",
-    "RobotNotReloadableError",
-    "reload_fmu_robot",
     "tracking_error",
     "state_roundtrip",
     "directional_derivative_error",
@@ -294,72 +290,6 @@ def _other_platforms(zf: zipfile.ZipFile, carried: dict[str, str], host: str, tm
         problems += [f"{carried[target.name]} ({target.name}): {p}" for p in found.problems]
     facts["structure"] = f"checked with llvm-objdump: {', '.join(p.name for p in others)}"
     return problems
-
-
-def _robot_node(fmu_path: str | os.PathLike[str]) -> ET.Element | None:
-    root = ET.fromstring(model_description_xml(fmu_path))
-    node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")  # FMI 2.0
-    if node is None:
-        node = root.find("./Annotations/Annotation[@type='manipulator-workbench']/Robot")  # FMI 3.0
-    if node is None or not node.get("name"):
-        return None
-    return node
-
-
-def fmu_robot(fmu_path: str | os.PathLike[str]) -> tuple[str, str] | None:
-    """``(robot, motor_model)`` recorded in the FMU's VendorAnnotations, or None for other FMUs."""
-    node = _robot_node(fmu_path)
-    if node is None:
-        return None
-    return node.get("name", ""), node.get("motorModel", "reflected")
-
-
-def fmu_robot_digest(fmu_path: str | os.PathLike[str]) -> str | None:
-    """The description digest recorded with the robot (``RobotDescription.digest()``), or None."""
-    node = _robot_node(fmu_path)
-    return None if node is None else node.get("digest") or None
-
-
-class RobotNotReloadableError(InputError):
-    """The robot recorded in an FMU does not load again as the robot the FMU was built from."""
-
-
-def reload_fmu_robot(fmu_path: str | os.PathLike[str]) -> Any:
-    """The robot the FMU was built from, from the FMU alone; None if it records none.
-
-    The robot embedded as ``resources/robot.json`` is loaded: its description, motor model and
-    parameters (:func:`fmu.robot_resource.read_robot`), equal to the exported robot (FMUs exported
-    before the resource: the built-in robot of the recorded name; before the parameters were
-    embedded: the description's parameters). The description's digest must equal the one recorded
-    in the VendorAnnotations.
-
-    Raises
-    ------
-    RobotNotReloadableError
-        The digests differ (the resource was edited, or an older FMU of a
-        modified robot that kept a built-in name).
-    model.RobotDescriptionError
-        The embedded description does not load, or (older FMUs) the name is
-        not a built-in robot.
-    """
-    from model import Robot
-    from model.loading import load_description
-
-    from .robot_resource import read_robot
-
-    recorded = fmu_robot(fmu_path)
-    if recorded is None:
-        return None
-    name, motor_model = recorded
-    robot = read_robot(fmu_path, motor_model)
-    if robot is None:
-        robot = Robot(load_description(name), motor_model=motor_model)
-    digest = fmu_robot_digest(fmu_path)
-    if digest is not None and robot.description.digest() != digest:
-        raise RobotNotReloadableError(
-            f"the FMU was built from a modified description (digest {digest[:16]}), not the one {name!r} "
-            f"loads now (digest {robot.description.digest()[:16]})")
-    return robot
 
 
 # ---------------------------------------------------------------- tracking

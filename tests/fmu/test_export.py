@@ -15,7 +15,8 @@ import pytest
 
 import fmu
 from fmu.build import C_DIR, FMI_HEADERS, STAMP, build_fmu
-from fmu.validate import binary_problems, fmu_robot, model_description_problems
+from fmu.robot_resource import fmu_robot
+from fmu.validate import binary_problems, model_description_problems
 from fmu.variables import build_table, derivative_unit, parse_unit, spec_from_plant, trivial_spec
 from model import InertiaConsistencyWarning, load_robot
 from model.plant import build_plant
@@ -288,7 +289,7 @@ def test_export_outside_linux_is_refused_with_a_clear_error(system, tmp_path, mo
 def test_the_description_digest_is_recorded_and_a_modified_robot_is_reloaded_from_the_fmu(tmp_path):
     """The mass-scaled SCARA keeps the name scara: its FMU's own description is reloaded (digest checked); an
     FMU without the embedded description (an older export) falls back on the built-in name and is refused."""
-    from fmu.validate import fmu_robot_digest, reload_fmu_robot
+    from fmu.robot_resource import fmu_robot_digest, reload_fmu_robot
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)

@@ -7,7 +7,7 @@
 * Its motor model is the FMU's ("full" against "reflected" on the planar 2R, whose full model
   has a different B(q): the FMU follows the full plant to rounding and misses the reflected one).
 * A ``motor_model`` keyword that differs from the Robot's is an InputError, not an override.
-* Reading back (fmu.validate.reload_fmu_robot, from resources/robot.json) gives a Robot equal to
+* Reading back (fmu.robot_resource.reload_fmu_robot, from resources/robot.json) gives a Robot equal to
   the exported one: description, motor model and parameters.
 * ``platforms`` takes the names the CLI's --platforms takes.
 * The tool outputs are in the world frame W, as ``fkine``: with a base pose they differ from the
@@ -24,7 +24,8 @@ import pytest
 
 from fmu import export_fmu
 from fmu.simulate import simulate_cs, step_input
-from fmu.validate import plant_states, reload_fmu_robot
+from fmu.robot_resource import reload_fmu_robot
+from fmu.validate import plant_states
 from model import InertiaConsistencyWarning, InputError, Robot, load_robot
 from model.description import BUILTIN_DIR
 from model.loading import load_description
@@ -83,7 +84,7 @@ def test_payload_friction_and_gravity_are_the_start_values_and_come_back(scara, 
 def test_the_full_motor_model_is_the_fmus_and_comes_back(tmp_path):
     robot = _quiet(Robot, _quiet(load_description, "planar2r"), motor_model="full")
     path = _quiet(export_fmu, robot, tmp_path / "planar2r_full.fmu")
-    from fmu.validate import fmu_robot
+    from fmu.robot_resource import fmu_robot
 
     assert fmu_robot(path) == ("planar2r", "full")
     back = reload_fmu_robot(path)

@@ -183,7 +183,7 @@ def test_validate_flags_a_wrong_model(scenario, monkeypatch):
 def test_validate_a_robot_from_a_file_with_coulomb_friction(tmp_path):
     """A TOML robot with Coulomb friction, validated from the FMU alone against the stick-slip reference."""
     from fmu import export_fmu
-    from fmu.validate import fmu_robot
+    from fmu.robot_resource import fmu_robot
     from model.description import BUILTIN_DIR
 
     text = (BUILTIN_DIR / "planar2r.toml").read_text().replace('name = "planar2r"', 'name = "planar2r_coulomb"')
@@ -235,7 +235,7 @@ def test_validate_fmu_command_names_a_file_that_is_not_an_fmu(tmp_path, capsys):
 def test_validate_compares_a_modified_robot_with_its_own_description():
     """An FMU of a mass-scaled SCARA keeps the name scara; its embedded description, not the built-in SCARA,
     is the reference (the built-in one would miss by the 1.5x masses)."""
-    from fmu.validate import reload_fmu_robot
+    from fmu.robot_resource import reload_fmu_robot
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertiaConsistencyWarning)
