@@ -5,15 +5,16 @@ The timing is the one :class:`~closed_loop.schedule.Schedule` of every loop, tha
 running sum; ``h = 1 / rate_hz``) the controller reads the plant state and the
 reference ``trajectory.path`` at ``t_k``; its motor torques are held over
 ``[t_k, t_k+1]`` (zero-order hold) while the plant FMU takes one
-``fmi2DoStep(t_k, h)``, integrated inside the FMU by RK4 in ``substeps`` equal
+``fmi2DoStep(t_k, h)`` (``fmi3DoStep``), integrated inside the FMU by RK4 in ``substeps`` equal
 sub-steps (its ``internal_step`` is set to ``h / substeps``, the same sub-step
 as the Python loop's).
 
-* :func:`run_closed_loop` - FMPy's low-level ``FMU2Slave`` (Gauss-Seidel order:
+* :func:`run_closed_loop` - the FMUs through :class:`fmu.instance.Instance` (FMI 2.0 or 3.0; its
+  buffered reader, writer and stepper in the loop; Gauss-Seidel order:
   plant outputs -> controller -> plant inputs within the same instant). The
   controller is a Python :class:`~control_design.controllers.Controller` or a
   controller FMU (:mod:`closed_loop.controller_fmu`), whose torques go to the plant
-  without leaving C buffers.
+  from buffer to buffer (no Python floats).
 * :func:`run_libcosim_closed_loop` - the same two FMUs in libcosim, connected by
   libcosim variable connections (plant ``q``, ``qd`` -> controller; controller
   ``tau_m`` -> plant). libcosim's fixed-step algorithm steps every slave in
@@ -32,8 +33,8 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import time
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -44,9 +45,10 @@ from control_design.design import RobotDesign
 from control_design.errors import SimulationDivergedError
 from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
-from fmu.archive import check_fmu_archive
 from fmu.build import build_fmu, export_fmu
 from fmu.cosim import CosimError, add_slave, last_error
+from fmu.instance import FmuCallError, Instance
+from fmu.opened import open_fmu
 from fmu.robot_resource import RobotNotReloadableError, reload_fmu_robot
 from model.errors import InputError
 from model.robot import Robot
@@ -95,62 +97,12 @@ def _limits(values: np.ndarray) -> np.ndarray | None:
     return None if np.all(values >= NO_LIMIT) else values
 
 
-class _Instance:
-    """One FMPy Co-Simulation instance with value references resolved once and ctypes buffers."""
-
-    def __init__(self, path: Path, name: str, workdir: str) -> None:
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-
-        check_fmu_archive(path)  # a stranger's FMU: refused before anything is extracted
-        self.md = read_model_description(str(path))
-        if self.md.coSimulation is None:
-            raise InputError(f"{path.name} has no Co-Simulation interface", parameter=name)
-        unzip = extract(str(path), unzipdir=os.path.join(workdir, name))
-        self.vr = {v.name: int(v.valueReference) for v in self.md.modelVariables}
-        self.name = name
-        self.path = path
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=unzip,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.live = False
-
-    def refs(self, names: Sequence[str]) -> Any:
-        from fmpy.fmi2 import fmi2ValueReference
-
-        missing = [nm for nm in names if nm not in self.vr]
-        if missing:
-            raise InputError(f"no variables {missing} in {self.path.name}", parameter=self.name)
-        return (fmi2ValueReference * len(names))(*[self.vr[nm] for nm in names])
-
-    def start(self, t0: float, values: Mapping[str, float]) -> None:
-        """Instantiate, set ``values`` in initialization mode, exit it."""
-        s = self.slave
-        s.instantiate()
-        self.live = True
-        s.setupExperiment(startTime=t0)
-        s.enterInitializationMode()
-        if values:
-            names = list(values)
-            s.setReal(list(self.refs(names)), [float(values[nm]) for nm in names])
-        s.exitInitializationMode()
-
-    def get(self, names: Sequence[str]) -> np.ndarray:
-        return np.array(self.slave.getReal(list(self.refs(names))))
-
-    def close(self) -> None:
-        """Terminate and free the instance (its library with it); only unload the library if never instantiated."""
-        from fmpy.fmi1 import FMICallException
-
-        if not self.live:
-            self.slave.freeLibrary()
-            return
-        self.live = False
-        try:
-            self.slave.terminate()
-        except FMICallException:
-            pass  # an instance in error mode refuses fmi2Terminate; it is freed all the same
-        finally:
-            self.slave.freeInstance()
+def _cs_instance(stack: ExitStack, path: Path, parameter: str, name: str) -> Instance:
+    """A Co-Simulation :class:`~fmu.instance.Instance` of the FMU at ``path``, closed with ``stack``."""
+    opened = stack.enter_context(open_fmu(path, parameter=parameter))
+    if "cs" not in opened.interfaces:
+        raise InputError(f"{path.name} has no Co-Simulation interface", parameter=parameter)
+    return stack.enter_context(opened.instance("cs", name))
 
 
 def _plant_start_values(plant: Robot, sched: Schedule) -> dict[str, float]:
@@ -169,7 +121,7 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
                     t_final: float | None = None, q0: Any = None, qd0: Any = None, substeps: int | None = None,
                     controller_parameters: Mapping[str, float] | None = None,
                     progress: Progress | None = None) -> TrackingResult:
-    """Run a controller on the plant FMU along ``trajectory`` with FMPy's ``FMU2Slave``.
+    """Run a controller on the plant FMU (FMI 2.0 or 3.0 Co-Simulation) along ``trajectory``.
 
     Parameters
     ----------
@@ -211,8 +163,6 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
     control_design.errors.SimulationDivergedError
         The plant FMU discarded a step (its state became non-finite).
     """
-    from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import fmi2Real
 
     plant_path = _existing(plant_fmu, "plant_fmu")
     plant_robot = _plant_robot(plant_path, plant)
@@ -235,105 +185,87 @@ def run_closed_loop(plant_fmu: str | os.PathLike[str], controller: Controller | 
         dt = 0.0
     sched: Schedule | None = None
 
-    with tempfile.TemporaryDirectory(prefix="mw_master_") as work:
-        plant_inst: _Instance | None = None
-        ctrl_inst: _Instance | None = None
-        try:
-            plant_inst = _Instance(plant_path, "plant", work)
-            ctrl_inst = None if ctrl_path is None else _Instance(ctrl_path, "controller", work)
-            if ctrl_inst is not None:
-                step = ctrl_inst.md.defaultExperiment.stepSize if ctrl_inst.md.defaultExperiment else None
-                dt = 1.0 / rate_hz if rate_hz is not None else float(step) if step else 0.0
-                if not dt > 0:
-                    raise InputError("expected a control rate (the controller FMU has no default step)",
-                                     parameter="rate_hz")
-            rate = rate_hz if rate_hz is not None else py_ctrl.rate_hz if py_ctrl is not None else None
-            sched = Schedule.build(plant_robot, trajectory, dt, rate_hz=rate, t_final=t_final, q0=q0, qd0=qd0,
-                                   substeps=substeps)
-            x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]
-            tau_names = [f"tau_m[{i + 1}]" for i in range(n)]
-            x_vr, tau_vr = plant_inst.refs(x_names), plant_inst.refs(tau_names)
-            plant_inst.start(float(sched.t[0]), _plant_start_values(plant_robot, sched))
-            x_buf = (fmi2Real * (2 * n))()
-            x_np = np.ctypeslib.as_array(x_buf)
-            tau_buf = (fmi2Real * n)()
-            tau_np = np.ctypeslib.as_array(tau_buf)
+    with ExitStack() as stack:
+        plant_inst = _cs_instance(stack, plant_path, "plant_fmu", "plant")
+        ctrl_inst = None if ctrl_path is None else _cs_instance(stack, ctrl_path, "controller", "controller")
+        if ctrl_inst is not None:
+            dt = 1.0 / rate_hz if rate_hz is not None else ctrl_inst.fmu.default_step or 0.0
+            if not dt > 0:
+                raise InputError("expected a control rate (the controller FMU has no default step)",
+                                 parameter="rate_hz")
+        rate = rate_hz if rate_hz is not None else py_ctrl.rate_hz if py_ctrl is not None else None
+        sched = Schedule.build(plant_robot, trajectory, dt, rate_hz=rate, t_final=t_final, q0=q0, qd0=qd0,
+                               substeps=substeps)
+        x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]
+        tau_names = [f"tau_m[{i + 1}]" for i in range(n)]
+        plant_inst.start(float(sched.t[0]), _plant_start_values(plant_robot, sched))
+        p_read = plant_inst.reader(x_names)
+        tau_np, p_write = plant_inst.writer(tau_names)
+        p_step = plant_inst.stepper()
 
-            if ctrl_inst is not None:
-                groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if "qdd_ref[1]" in ctrl_inst.vr else [])
-                ref_names = [f"{g}[{i + 1}]" for g in groups for i in range(n)]
-                u_vr = ctrl_inst.refs(ref_names + x_names)
-                y_vr = ctrl_inst.refs(tau_names)
-                ctrl_inst.start(float(sched.t[0]), dict(controller_parameters or {}))
-                tau_m_max = _limits(ctrl_inst.get([f"tau_m_max[{i + 1}]" for i in range(n)]))
-                columns = {"q_ref": sched.q_ref, "qd_ref": sched.qd_ref, "qdd_ref": sched.qdd_ref}
-                R = np.ascontiguousarray(np.hstack([columns[g] for g in groups]))
-                m = R.shape[1]
-                u_buf = (fmi2Real * (m + 2 * n))()
-                u_np = np.ctypeslib.as_array(u_buf)
-            else:
-                assert py_ctrl is not None
-                tau_m_max = None if py_ctrl.tau_m_max is None else py_ctrl.tau_m_max.copy()
+        if ctrl_inst is not None:
+            groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if ctrl_inst.fmu.has("qdd_ref[1]") else [])
+            ref_names = [f"{g}[{i + 1}]" for g in groups for i in range(n)]
+            ctrl_inst.start(float(sched.t[0]), dict(controller_parameters or {}))
+            tau_m_max = _limits(ctrl_inst.get([f"tau_m_max[{i + 1}]" for i in range(n)]))
+            columns = {"q_ref": sched.q_ref, "qd_ref": sched.qd_ref, "qdd_ref": sched.qdd_ref}
+            R = np.ascontiguousarray(np.hstack([columns[g] for g in groups]))
+            m = R.shape[1]
+            u_np, c_write = ctrl_inst.writer(ref_names + x_names)
+            c_read = ctrl_inst.reader(tau_names)
+            c_step = ctrl_inst.stepper()
+        else:
+            assert py_ctrl is not None
+            tau_m_max = None if py_ctrl.tau_m_max is None else py_ctrl.tau_m_max.copy()
 
-            steps, t, h = sched.steps, sched.t, sched.dt
-            Q = np.empty((steps + 1, n))
-            QD = np.empty((steps + 1, n))
-            TAU = np.empty((steps + 1, n))
-            p_comp = plant_inst.slave.component
-            p_get, p_set, p_step = (plant_inst.slave.fmi2GetReal, plant_inst.slave.fmi2SetReal,
-                                    plant_inst.slave.fmi2DoStep)
-            n2 = 2 * n
+        steps, t, h = sched.steps, sched.t, sched.dt
+        Q = np.empty((steps + 1, n))
+        QD = np.empty((steps + 1, n))
+        TAU = np.empty((steps + 1, n))
 
-            def plant_step(k: int) -> None:
-                """Step the plant over ``[t_k, t_k+1]`` with the torques in ``tau_buf``; report the progress."""
-                tk = float(t[k])
-                try:
-                    p_set(p_comp, tau_vr, n, tau_buf)  # refuses non-finite torques
-                    p_step(p_comp, tk, h, 1)           # discards a step whose state is not finite
-                except FMICallException as exc:
-                    raise SimulationDivergedError(
-                        f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
-                        f"diverged (controller {kind!r})") from exc
-                if progress is not None:
-                    progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
+        def plant_step(k: int) -> None:
+            """Step the plant over ``[t_k, t_k+1]`` with the torques in ``tau_np``; report the progress."""
+            tk = float(t[k])
+            try:
+                p_write()        # refuses non-finite torques
+                p_step(tk, h)    # discards a step whose state is not finite
+            except FmuCallError as exc:
+                raise SimulationDivergedError(
+                    f"simulation: the plant FMU rejected the step at t = {tk:g} s ({exc}): the closed loop "
+                    f"diverged (controller {kind!r})") from exc
+            if progress is not None:
+                progress((k + 1) / steps, float(t[k + 1]), float(t[-1]))
 
-            start = time.perf_counter()
-            if ctrl_inst is not None:
-                c_comp = ctrl_inst.slave.component
-                c_get, c_set, c_step = (ctrl_inst.slave.fmi2GetReal, ctrl_inst.slave.fmi2SetReal,
-                                        ctrl_inst.slave.fmi2DoStep)
-                mu = m + n2
-                for k in range(steps + 1):
-                    p_get(p_comp, x_vr, n2, x_buf)
-                    Q[k], QD[k] = x_np[:n], x_np[n:]
-                    u_np[:m] = R[k]
-                    u_np[m:] = x_np
-                    c_set(c_comp, u_vr, mu, u_buf)
-                    c_get(c_comp, y_vr, n, tau_buf)
-                    TAU[k] = tau_np
-                    if k == steps:
-                        break
-                    c_step(c_comp, float(t[k]), h, 1)
-                    plant_step(k)
-            else:
-                assert py_ctrl is not None
-                py_ctrl.reset()
-                Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
-                for k in range(steps + 1):
-                    p_get(p_comp, x_vr, n2, x_buf)
-                    q, qd = x_np[:n].copy(), x_np[n:].copy()
-                    Q[k], QD[k] = q, qd
-                    tau_m = py_ctrl.update(float(t[k]), q, qd, Reference(Qr[k], QDr[k], QDDr[k]))
-                    TAU[k] = tau_m
-                    if k == steps:
-                        break
-                    tau_np[:] = tau_m
-                    plant_step(k)
-            wall = time.perf_counter() - start
-        finally:
-            for inst in (ctrl_inst, plant_inst):
-                if inst is not None:
-                    inst.close()
+        start = time.perf_counter()
+        if ctrl_inst is not None:
+            for k in range(steps + 1):
+                x = p_read()
+                Q[k], QD[k] = x[:n], x[n:]
+                u_np[:m] = R[k]
+                u_np[m:] = x
+                c_write()
+                tau = c_read()
+                TAU[k] = tau
+                if k == steps:
+                    break
+                c_step(float(t[k]), h)
+                tau_np[:] = tau
+                plant_step(k)
+        else:
+            assert py_ctrl is not None
+            py_ctrl.reset()
+            Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
+            for k in range(steps + 1):
+                x = p_read()
+                q, qd = x[:n].copy(), x[n:].copy()
+                Q[k], QD[k] = q, qd
+                tau_m = py_ctrl.update(float(t[k]), q, qd, Reference(Qr[k], QDr[k], QDDr[k]))
+                TAU[k] = tau_m
+                if k == steps:
+                    break
+                tau_np[:] = tau_m
+                plant_step(k)
+        wall = time.perf_counter() - start
     assert sched is not None
     return sched.result(plant_robot, kind, Q, QD, TAU, tau_m_max, wall)
 
@@ -345,15 +277,6 @@ class _HeldInputs:
 
     def apply(self, time: float, continuous: bool = True, discrete: bool = True, after_event: bool = False) -> None:
         return None
-
-
-def _event_iteration(fmu: Any) -> None:
-    """``fmi2NewDiscreteStates`` until nothing changes (the friction modes settle in the FMU)."""
-    needed, terminate = True, False
-    while needed and not terminate:
-        needed, terminate, *_ = fmu.newDiscreteStates()
-    if terminate:
-        raise SimulationDivergedError("simulation: the plant FMU asked to terminate at an event")
 
 
 def run_closed_loop_me(plant_fmu: str | os.PathLike[str], controller: Controller, trajectory: Trajectory, *,
@@ -373,14 +296,12 @@ def run_closed_loop_me(plant_fmu: str | os.PathLike[str], controller: Controller
 
     Raises
     ------
-    ValueError
+    model.errors.InputError
         Missing FMU, an FMU without Model Exchange, joint counts that differ.
     control_design.errors.SimulationDivergedError
         The FMU refused a call (its state became non-finite) or CVode failed.
     """
-    from fmpy import extract, read_model_description
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Model
     from fmpy.sundials import CVodeSolver
 
     plant_path = _existing(plant_fmu, "plant_fmu")
@@ -391,74 +312,58 @@ def run_closed_loop_me(plant_fmu: str | os.PathLike[str], controller: Controller
                          parameter="controller")
     sched = Schedule.build(plant_robot, trajectory, controller.dt, rate_hz=controller.rate_hz, t_final=t_final,
                            q0=q0, qd0=qd0, substeps=1)
-    check_fmu_archive(plant_path)
-    md = read_model_description(str(plant_path))
-    if md.modelExchange is None:
-        raise InputError(f"plant_fmu: {plant_path.name} has no Model Exchange interface")
-    nx, nz = md.numberOfContinuousStates, md.numberOfEventIndicators
-    vr = {v.name: int(v.valueReference) for v in md.modelVariables}
-    x_vr = [vr[f"q[{i + 1}]"] for i in range(n)] + [vr[f"qd[{i + 1}]"] for i in range(n)]
-    tau_vr = [vr[f"tau_m[{i + 1}]"] for i in range(n)]
+    x_names = [f"q[{i + 1}]" for i in range(n)] + [f"qd[{i + 1}]" for i in range(n)]
+    tau_names = [f"tau_m[{i + 1}]" for i in range(n)]
     start_values = {k: v for k, v in _plant_start_values(plant_robot, sched).items() if k != "internal_step"}
     steps, t = sched.steps, sched.t
     Q, QD, TAU = (np.empty((steps + 1, n)) for _ in range(3))
-    with tempfile.TemporaryDirectory(prefix="mw_master_me_") as work:
-        fmu = FMU2Model(guid=md.guid, unzipDirectory=extract(str(plant_path), unzipdir=work),
-                        modelIdentifier=md.modelExchange.modelIdentifier, instanceName="plant")
-        fmu.instantiate()
-        try:
-            fmu.setupExperiment(startTime=float(t[0]))
-            fmu.enterInitializationMode()
-            fmu.setReal([vr[k] for k in start_values], [float(v) for v in start_values.values()])
-            fmu.exitInitializationMode()
-            _event_iteration(fmu)
-            fmu.enterContinuousTimeMode()
-            solver = CVodeSolver(nx=nx, nz=nz, get_x=fmu.getContinuousStates, set_x=fmu.setContinuousStates,
-                                 get_dx=fmu.getDerivatives, get_z=fmu.getEventIndicators,
-                                 get_nominals=fmu.getNominalsOfContinuousStates, set_time=fmu.setTime,
-                                 input=_HeldInputs(), startTime=float(t[0]), maxStep=sched.dt,
-                                 relativeTolerance=relative_tolerance, maxNumSteps=100_000)
-            controller.reset()
-            Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
-            start = time.perf_counter()
-            for k in range(steps + 1):
-                x = np.array(fmu.getReal(x_vr))
-                Q[k], QD[k] = x[:n], x[n:]
-                tau_m = controller.update(float(t[k]), x[:n].copy(), x[n:].copy(), Reference(Qr[k], QDr[k], QDDr[k]))
-                TAU[k] = tau_m
-                if k == steps:
-                    break
-                fmu.enterEventMode()
-                fmu.setReal(tau_vr, [float(v) for v in tau_m])
-                _event_iteration(fmu)  # the friction modes follow the new torques
-                fmu.enterContinuousTimeMode()
-                solver.reset(float(t[k]))
-                tk, t_next = float(t[k]), float(t[k + 1])
-                while tk < t_next and not math.isclose(tk, t_next, rel_tol=1e-12, abs_tol=1e-15):
-                    state_event, _, tk = solver.step(tk, t_next)
-                    fmu.setTime(tk)
-                    step_event, terminate = fmu.completedIntegratorStep()
-                    if terminate:
-                        raise SimulationDivergedError(f"simulation: the plant FMU asked to terminate at t = {tk:g} s")
-                    if state_event or step_event:
-                        fmu.enterEventMode()
-                        _event_iteration(fmu)  # a joint sticks or breaks loose
-                        fmu.enterContinuousTimeMode()
-                        solver.reset(tk)
-                fmu.setTime(t_next)
-                if progress is not None:
-                    progress((k + 1) / steps, t_next, float(t[-1]))
-            wall = time.perf_counter() - start
-            del solver
-        except (FMICallException, RuntimeError) as exc:
-            raise SimulationDivergedError(f"simulation: the Model Exchange closed loop failed ({exc}) "
-                                          f"(controller {controller.kind!r})") from exc
-        finally:
+    with open_fmu(plant_path, parameter="plant_fmu") as opened:
+        if "me" not in opened.interfaces:
+            raise InputError(f"{plant_path.name} has no Model Exchange interface", parameter="plant_fmu")
+        x_sel, tau_sel = opened.select(x_names), opened.select(tau_names)
+        with opened.instance("me", "plant") as inst:
             try:
-                fmu.terminate()
-            except FMICallException:
-                pass  # an instance in error mode refuses fmi2Terminate; it is freed all the same
-            fmu.freeInstance()
+                inst.start(float(t[0]), start_values)  # start modes settled, then Continuous-Time Mode
+                solver = CVodeSolver(nx=opened.n_states, nz=opened.n_event_indicators, **inst.solver_functions(),
+                                     input=_HeldInputs(), startTime=float(t[0]), maxStep=sched.dt,
+                                     relativeTolerance=relative_tolerance, maxNumSteps=100_000)
+                controller.reset()
+                Qr, QDr, QDDr = sched.q_ref, sched.qd_ref, sched.qdd_ref
+                start = time.perf_counter()
+                for k in range(steps + 1):
+                    x = inst.get(x_sel)
+                    Q[k], QD[k] = x[:n], x[n:]
+                    tau_m = controller.update(float(t[k]), x[:n].copy(), x[n:].copy(),
+                                              Reference(Qr[k], QDr[k], QDDr[k]))
+                    TAU[k] = tau_m
+                    if k == steps:
+                        break
+                    inst.enter_event_mode()
+                    inst.set(tau_sel, tau_m)
+                    inst.event_iteration()  # the friction modes follow the new torques
+                    inst.enter_continuous_time_mode()
+                    solver.reset(float(t[k]))
+                    tk, t_next = float(t[k]), float(t[k + 1])
+                    while tk < t_next and not math.isclose(tk, t_next, rel_tol=1e-12, abs_tol=1e-15):
+                        state_event, _, tk = solver.step(tk, t_next)
+                        inst.set_time(tk)
+                        step_event, terminate = inst.completed_integrator_step()
+                        if terminate:
+                            raise SimulationDivergedError(
+                                f"simulation: the plant FMU asked to terminate at t = {tk:g} s")
+                        if state_event or step_event:
+                            inst.enter_event_mode()
+                            inst.event_iteration()  # a joint sticks or breaks loose
+                            inst.enter_continuous_time_mode()
+                            solver.reset(tk)
+                    inst.set_time(t_next)
+                    if progress is not None:
+                        progress((k + 1) / steps, t_next, float(t[-1]))
+                wall = time.perf_counter() - start
+                del solver
+            except (FmuCallError, FMICallException, RuntimeError) as exc:  # CVode's calls bypass the adapter
+                raise SimulationDivergedError(f"simulation: the Model Exchange closed loop failed ({exc}) "
+                                              f"(controller {controller.kind!r})") from exc
     return sched.result(plant_robot, controller.kind, Q, QD, TAU, controller.tau_m_max, wall)
 
 
@@ -503,12 +408,11 @@ def run_libcosim_closed_loop(plant_fmu: str | os.PathLike[str], controller_fmu: 
     n = plant_robot.n
     kind = controller_fmu_kind(ctrl_path)[1]
     if rate_hz is None:
-        from fmpy import read_model_description
-
-        de = read_model_description(str(ctrl_path)).defaultExperiment
-        if de is None or not de.stepSize:
+        with open_fmu(ctrl_path, parameter="controller_fmu") as opened:
+            default_step = opened.default_step
+        if not default_step:
             raise InputError("expected a control rate (the controller FMU has no default step)", parameter="rate_hz")
-        dt = float(de.stepSize)
+        dt = default_step
     else:
         dt = 1.0 / rate_hz
     step_ns = int(round(dt * _NS_PER_S))
