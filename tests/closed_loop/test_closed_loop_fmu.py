@@ -36,7 +36,11 @@ from control_design import NO_LIMIT, design_robot, plant_with_mismatch, referenc
 from control_design.computed_torque import ModelMismatch
 from control_design.controllers import DecentralisedController
 from control_design.errors import SimulationDivergedError
+from fmu import export_fmu
+from fmu.instance import FmuCallError
+from fmu.opened import open_fmu
 from model import InertiaConsistencyWarning, load_robot
+from model.errors import InputError
 
 from tests.support.fmu_support import heavy_scara_fmu, scara_fmu
 
@@ -152,51 +156,37 @@ def test_pid_controller_fmu_integrator_is_a_sampled_state(robot, pid_fmu):
 def test_pid_controller_fmu_steps_ticks_and_state(pid_fmu):
     """A step of two periods is two ticks with the inputs held; a step that is no whole number of periods,
     Model Exchange, and a serialised state of the wrong size are refused; the FMU state carries z."""
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Model, FMU2Slave
-
     _, path = pid_fmu
-    md = read_model_description(str(path))
-    assert md.modelExchange is None and md.coSimulation is not None
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzip = extract(str(path))
-    inputs = [vr[f"{g}[{i}]"] for g in ("q_ref", "qd_ref", "q", "qd") for i in range(1, 5)]
+    inputs = [f"{g}[{i}]" for g in ("q_ref", "qd_ref", "q", "qd") for i in range(1, 5)]
     q_ref = np.array([0.1, 0.2, 0.05, 0.3])
-    u = list(np.concatenate([q_ref, np.zeros(4), q_ref - 1e-6 * np.arange(1, 5), np.zeros(4)]))  # unsaturated
-    z = [vr[f"z[{i}]"] for i in range(1, 5)]
-
-    def slave(name):
-        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName=name)
-        s.instantiate()
-        s.setupExperiment(startTime=0.0)
-        s.enterInitializationMode()
-        s.exitInitializationMode()
-        s.setReal(inputs, u)
-        return s
-
-    a, b = slave("a"), slave("b")
-    a.doStep(0.0, 2e-3)
-    b.doStep(0.0, 1e-3)
-    b.doStep(1e-3, 1e-3)
-    za = np.array(a.getReal(z))
-    assert np.array_equal(za, np.array(b.getReal(z))) and np.all(za != 0)
-    state = a.getFMUstate()
-    blob = a.serializeFMUstate(state)
-    a.doStep(2e-3, 1e-3)
-    assert not np.array_equal(np.array(a.getReal(z)), za)
-    a.setFMUstate(a.deSerializeFMUstate(blob))
-    assert np.array_equal(np.array(a.getReal(z)), za)                # z is in the (serialised) FMU state
-    with pytest.raises(Exception):
-        a.deSerializeFMUstate(blob[:-8])
-    with pytest.raises(Exception):
-        b.doStep(2e-3, 1.5e-3)                                       # not a whole number of periods
-    for s in (a, b):
-        s.freeInstance()
-    me = FMU2Model(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                   instanceName="me")
-    with pytest.raises(Exception):
-        me.instantiate()
+    u = np.concatenate([q_ref, np.zeros(4), q_ref - 1e-6 * np.arange(1, 5), np.zeros(4)])  # unsaturated
+    z = [f"z[{i}]" for i in range(1, 5)]
+    with open_fmu(path) as fmu:
+        assert "me" not in fmu.interfaces and "cs" in fmu.interfaces
+        with fmu.instance("cs", "a") as a, fmu.instance("cs", "b") as b:
+            for s in (a, b):
+                s.start(0.0)
+                s.set(inputs, u)
+            a.do_step(0.0, 2e-3)
+            b.do_step(0.0, 1e-3)
+            b.do_step(1e-3, 1e-3)
+            za = a.get(z)
+            assert np.array_equal(za, b.get(z)) and np.all(za != 0)
+            state = a.get_state()
+            blob = a.serialize(state)
+            a.do_step(2e-3, 1e-3)
+            assert not np.array_equal(a.get(z), za)
+            a.set_state(a.deserialize(blob))
+            assert np.array_equal(a.get(z), za)                          # z is in the (serialised) FMU state
+            with pytest.raises(FmuCallError):
+                a.deserialize(blob[:-8])
+            with pytest.raises(FmuCallError):
+                b.do_step(2e-3, 1.5e-3)                                  # not a whole number of periods
+        with pytest.raises(InputError, match="has no Model Exchange interface"):
+            fmu.instance("me", "me")
+        fmu.interfaces["me"] = fmu.interfaces["cs"]  # ask the binary itself: fmi2Instantiate(fmi2ModelExchange)
+        with pytest.raises(FmuCallError, match="instantiating 'me' failed"), fmu.instance("me", "me") as me:
+            me.instantiate()
 
 
 def test_plant_fmu_with_pid_controller_fmu_matches_python_loop(robot, task, plant_fmu, pid_fmu):
@@ -225,6 +215,23 @@ def test_plant_fmu_with_python_controller_matches_python_loop(kind, robot, task,
     m, mr = res.metrics(), ref.metrics()
     assert np.allclose(m.max_error, mr.max_error, rtol=1e-6, atol=1e-12)
     assert len(seen) == 15000 and seen[-1] == (1.0, pytest.approx(15.0), pytest.approx(15.0))
+
+
+def test_an_fmi3_plant_fmu_runs_the_same_loops_bit_for_bit(robot, designs, task, plant_fmu, controller_fmus,
+                                                         tmp_path):
+    """The master drives an FMI 3.0 plant FMU through the same adapter: 1 s with the Python controller and with
+    the controller FMU equals the FMI 2.0 plant's runs bit for bit (the same C, the same calls)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertiaConsistencyWarning)
+        fmi3 = export_fmu(robot, tmp_path / "scara3.fmu", step=1.0 / RATE, fmi_version=3)
+    with open_fmu(fmi3) as fmu:
+        assert fmu.fmi_version == 3
+    for controller in (designs["pd"].controller(RATE), controller_fmus["pd"]):
+        a = run_closed_loop(fmi3, controller, task, plant=robot, t_final=1.0)
+        b = run_closed_loop(plant_fmu, controller, task, plant=robot, t_final=1.0)
+        assert a.t.size == 1001
+        for field in ("q", "qd", "tau_m", "tau_m_max"):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)
 
 
 # ------------------------------------------------- (b) plant FMU + controller FMU
