@@ -42,9 +42,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
-import zipfile
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -57,6 +54,7 @@ from control_design.design import RobotDesign
 from control_design.laws import NO_LIMIT
 from control_design.reference import Reference
 from fmu.build import build_fmu
+from fmu.opened import open_fmu
 from fmu.variables import DiscreteStates, ModelSpec, Quantity, fmu_identifier
 from model.robot import Robot
 from model.errors import InputError
@@ -314,18 +312,16 @@ def controller_fmu_kind(path: str | os.PathLike[str]) -> tuple[str, str]:
 
     Raises
     ------
+    fmu.archive.FmuArchiveError
+        Not a file, not a zip archive, or an archive that breaks a limit of :mod:`fmu.archive`.
     model.errors.InputError
-        The file is not a controller FMU of this workbench.
+        An unreadable model description, or not a controller FMU of this workbench.
     """
-    try:
-        with zipfile.ZipFile(path) as zf:
-            root = ET.fromstring(zf.read("modelDescription.xml"))
-    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
-        raise InputError(f"expected a controller FMU, could not read {str(path)!r}: {exc}", parameter="path") from exc
-    match = _NAME_PATTERN.match(root.get("modelName", ""))
+    with open_fmu(path, parameter="path") as fmu:  # the archive is checked before its description is parsed
+        model_name = fmu.md.modelName
+    match = _NAME_PATTERN.match(model_name or "")
     if match is None:
-        raise InputError(f"{str(path)!r} is not a controller FMU (modelName {root.get('modelName')!r})",
-                         parameter="path")
+        raise InputError(f"{str(path)!r} is not a controller FMU (modelName {model_name!r})", parameter="path")
     return match["robot"], match["kind"]
 
 
@@ -384,32 +380,20 @@ def validate_controller_fmu(path: str | os.PathLike[str], controller: Controller
     the tracking errors are drawn log-uniformly between 1e-6 and 1e-1 so that the
     torques fall on both sides of the limits.
     """
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
     from fmu.validate import binary_problems, model_description_problems
 
     path = str(path)
     described = tuple(model_description_problems(path))
     binary = tuple(binary_problems(path)[0])
-    md = read_model_description(path)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
     n = controller.n
     rng = np.random.default_rng(seed)
-    unzip = extract(path)
     worst_abs = worst_rel = 0.0
     saturated = 0
-    try:
-        slave = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                          instanceName="controller_check")
-        slave.instantiate()
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.exitInitializationMode()
-        has_qdd = "qdd_ref[1]" in vr
-        groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if has_qdd else []) + ["q", "qd"]
-        in_vrs = [vr[f"{g}[{i + 1}]"] for g in groups for i in range(n)]
-        out_vrs = [vr[f"tau_m[{i + 1}]"] for i in range(n)]
+    with open_fmu(path, parameter="path") as fmu, fmu.instance("cs", "controller_check") as slave:
+        slave.start(0.0)
+        groups = ["q_ref", "qd_ref"] + (["qdd_ref"] if fmu.has("qdd_ref[1]") else []) + ["q", "qd"]
+        inputs = fmu.select([f"{g}[{i + 1}]" for g in groups for i in range(n)])
+        outputs = fmu.select([f"tau_m[{i + 1}]" for i in range(n)])
         controller.reset()
         for k in range(samples):
             qr, qdr = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n)
@@ -417,9 +401,9 @@ def validate_controller_fmu(path: str | os.PathLike[str], controller: Controller
             scale = 10.0 ** rng.uniform(-6.0, -1.0)
             q, qd = qr + scale * rng.uniform(-1, 1, n), qdr + 10.0 * scale * rng.uniform(-1, 1, n)
             values = {"q_ref": qr, "qd_ref": qdr, "qdd_ref": qddr, "q": q, "qd": qd}
-            slave.setReal(in_vrs, list(np.concatenate([values[g] for g in groups])))
-            fmu_tau = np.array(slave.getReal(out_vrs))
-            slave.doStep(currentCommunicationPoint=k * controller.dt, communicationStepSize=controller.dt)
+            slave.set(inputs, np.concatenate([values[g] for g in groups]))
+            fmu_tau = slave.get(outputs)
+            slave.do_step(k * controller.dt, controller.dt)
             py_tau = controller.update(k * controller.dt, q, qd, Reference(qr, qdr, qddr))
             diff = np.abs(fmu_tau - py_tau)
             worst_abs = max(worst_abs, float(diff.max()))
@@ -427,7 +411,4 @@ def validate_controller_fmu(path: str | os.PathLike[str], controller: Controller
             if controller.tau_m_max is not None:
                 saturated += int(np.sum(np.abs(py_tau) >= controller.tau_m_max))
         slave.terminate()
-        slave.freeInstance()
-    finally:
-        shutil.rmtree(unzip, ignore_errors=True)
     return ControllerFmuReport(path, described, binary, samples, worst_abs, worst_rel, saturated / (samples * n))
