@@ -234,6 +234,14 @@ class OpenedFmu:
             except KeyError:
                 return None
 
+    def member_size(self, name: str) -> int | None:
+        """The uncompressed size in bytes of archive member ``name`` (as its header declares it), or None."""
+        with zipfile.ZipFile(self.path) as zf:
+            try:
+                return zf.getinfo(name).file_size
+            except KeyError:
+                return None
+
     def members(self) -> list[str]:
         """Every member name of the archive."""
         with zipfile.ZipFile(self.path) as zf:

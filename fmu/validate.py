@@ -35,7 +35,7 @@ import numpy as np
 from model.errors import InputError
 from model.limits import MAX_SAMPLES
 
-from .archive import check_fmu_archive, model_description_xml
+from .archive import check_fmu_archive
 from .inspection import binary_problems, internal_step, model_description_problems
 from .numeric_checks import (ME_RTOL, TOLERANCES, RoundTrip, TrackingError, directional_derivative_error,
                              state_roundtrip, tracking_checks, tracking_error)
@@ -60,7 +60,6 @@ __all__ = [
     "ValidationReport",
     "feedforward_profile",
     "reference_response",
-    "model_description_xml",
     "model_description_problems",
     "binary_problems",
     "tracking_error",
