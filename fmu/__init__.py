@@ -4,7 +4,8 @@ Data flow: :mod:`fmu.variables` (the one variable table) -> :mod:`fmu.build`
 (CasADi C, the wrapper of ``fmu/c/``, the host's compiler (``$CC``, else gcc or cc) and, for
 the other platforms, zig's clang through :mod:`fmu.cross` with the table of
 :mod:`fmu.platforms`, zip) -> :mod:`fmu.simulate` (FMPy) and :mod:`fmu.cosim` (libcosim, FMI
-2.0 only) -> :mod:`fmu.validate` (all of it checked against the Python model). It exports and validates any model spec and knows
+2.0 only) -> :mod:`fmu.validate` (all of it checked against the Python model). An FMU is read through
+:mod:`fmu.opened` (``open_fmu``) and run through :mod:`fmu.instance` (``Instance``). It exports and validates any model spec and knows
 nothing of controllers: closed loops through FMUs are :mod:`closed_loop`.
 """
 

@@ -13,13 +13,16 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from model.errors import ToolchainError
 
 from .platforms import PLATFORMS, Platform, platform_folder
+
+if TYPE_CHECKING:
+    from .opened import OpenedFmu
 
 __all__ = ["BinaryCheck", "carried_platforms", "check_binary", "objdump"]
 
@@ -60,10 +63,18 @@ def objdump() -> str | None:
     return None
 
 
-def carried_platforms(fmu_path: str | Path, fmi_version: int = 2) -> dict[str, str]:
-    """Platform name -> archive member of its binary, for every platform of the table the FMU has a binary for."""
-    with zipfile.ZipFile(fmu_path) as zf:
-        names = set(zf.namelist())
+def carried_platforms(fmu: "str | Path | OpenedFmu", fmi_version: int = 2) -> dict[str, str]:
+    """Platform name -> archive member of its binary, for every platform of the table the FMU has a binary for.
+
+    ``fmu``: an :class:`fmu.opened.OpenedFmu` or the path of an FMU (then opened by :func:`fmu.opened.open_fmu`).
+    """
+    from .opened import OpenedFmu, open_fmu
+
+    if isinstance(fmu, OpenedFmu):
+        names = set(fmu.members())
+    else:
+        with open_fmu(fmu, validate=False) as opened:
+            names = set(opened.members())
     found = {}
     for target in PLATFORMS:
         folder = f"binaries/{platform_folder(target.name, fmi_version)}/"

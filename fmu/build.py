@@ -222,7 +222,7 @@ def _reference_experiment(robot: Any, internal_step: float, fmi_version: int) ->
     import numpy as np
 
     from .ls_ref import EXPERIMENT_HOLD, EXPERIMENT_MAX_STEP, EXPERIMENT_T_END, experiment_files
-    from .validate import feedforward_profile, plant_states
+    from .reference import feedforward_profile, plant_states
 
     step = min(internal_step, EXPERIMENT_MAX_STEP)
     k = int(round(EXPERIMENT_T_END / step))

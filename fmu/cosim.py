@@ -15,7 +15,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .archive import check_fmu_archive
+from .opened import open_fmu
 from model.errors import ToolchainError
 
 __all__ = ["CosimError", "LibcosimUnavailableError", "CosimResult", "add_slave", "last_error", "libcosim_unavailable",
@@ -109,7 +109,8 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     CosimError
         libcosim refused a call.
     fmu.archive.FmuArchiveError
-        The archive breaks a limit of :mod:`fmu.archive` (checked before libcosim extracts it).
+        The archive breaks a limit of :mod:`fmu.archive` (checked by :func:`fmu.opened.open_fmu` before libcosim
+        extracts it).
     """
     reason = libcosim_unavailable()
     if reason is not None:
@@ -124,7 +125,7 @@ def run_libcosim(fmu_path: str | os.PathLike[str], *, stop_time: float, step: fl
     path = Path(fmu_path).resolve()
     if not path.is_file():
         raise CosimError(f"expected an FMU file, got {str(path)!r}", parameter="fmu_path")
-    check_fmu_archive(path)  # before libcosim extracts it
+    open_fmu(path, validate=False).close()  # the archive checked and its description read before libcosim extracts it
     step_ns = int(round(step * NS_PER_S))
     if step_ns <= 0:
         raise CosimError(f"expected at least 1 ns, got {step!r} s", parameter="step")

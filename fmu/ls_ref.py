@@ -27,9 +27,9 @@ variable is one column of space-separated values, as FMPy's ``read_csv`` and
 fmusim read it, an FMI 2.0 FMU has one column per scalar (``q[1]``).
 
 The reference is the workbench's own simulation, not the FMU: the one plant
-advanced by its fixed-step rule (:func:`fmu.validate.plant_states`, the compiled
+advanced by its fixed-step rule (:func:`fmu.reference.plant_states`, the compiled
 plant) at the FMU's ``internal_step``, under the computed-torque feed-forward of
-the robot's task (:func:`fmu.validate.feedforward_profile`) over
+the robot's task (:func:`fmu.reference.feedforward_profile`) over
 :data:`EXPERIMENT_T_END`; :func:`fmu.build.export_fmu` computes it and this module
 writes the files (it imports nothing of the validator, which imports it). The tolerance of a column is :data:`REF_RTOL` times
 ``max(1, max |column|)``: the same rule on the same generated expressions is
@@ -46,13 +46,15 @@ and replays it with FMPy's Co-Simulation.
 from __future__ import annotations
 
 import os
-import zipfile
 from dataclasses import dataclass
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from model.errors import InputError
+
+if TYPE_CHECKING:
+    from .opened import OpenedFmu
 
 __all__ = [
     "LS_REF_DIR",
@@ -87,7 +89,7 @@ EXPERIMENT_T_END = 0.5
 REF_RTOL = 1e-9
 #: Longest communication step of the experiment, s (an FMU with a longer internal step is sampled at it).
 EXPERIMENT_MAX_STEP = 1e-3
-#: Hold of the feed-forward torques, s (those of :func:`fmu.validate.feedforward_profile`).
+#: Hold of the feed-forward torques, s (those of :func:`fmu.reference.feedforward_profile`).
 EXPERIMENT_HOLD = 0.01
 
 EXPERIMENT_FILE = "tracking.exp"
@@ -272,11 +274,12 @@ def _documentation(name: str, t_end: float, step: float) -> str:
 
 # ------------------------------------------------------------------ reading back
 
-def _member(zf: zipfile.ZipFile, name: str) -> str:
+def _member(fmu: "OpenedFmu", name: str) -> str:
+    data = fmu.member(name)
+    if data is None:
+        raise InputError(f"{name}: missing from the FMU", parameter=name)
     try:
-        return zf.read(name).decode("utf-8")
-    except KeyError:
-        raise InputError(f"{name}: missing from the FMU", parameter=name) from None
+        return data.decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(f"{name}: not UTF-8 text", parameter=name) from None
 
@@ -284,16 +287,15 @@ def _member(zf: zipfile.ZipFile, name: str) -> str:
 def read_experiment(fmu_path: str | os.PathLike[str]) -> Experiment | None:
     """The FMU's reference experiment, or None when it carries none (no manifest).
 
-    The archive passes :func:`fmu.archive.check_fmu_archive` first; the XML is parsed
+    The FMU is opened by :func:`fmu.opened.open_fmu` (the archive checked first); the XML is parsed
     without DTDs. Raises InputError naming the member when the files are malformed.
     """
     from defusedxml import ElementTree as SafeET
 
-    from .archive import check_fmu_archive
+    from .opened import open_fmu
 
-    check_fmu_archive(fmu_path)
-    with zipfile.ZipFile(fmu_path) as zf:
-        if f"{LS_REF_DIR}/{MANIFEST_FILE}" not in zf.namelist():
+    with open_fmu(fmu_path, validate=False) as zf:
+        if f"{LS_REF_DIR}/{MANIFEST_FILE}" not in zf.members():
             return None
         manifest = SafeET.fromstring(_member(zf, f"{LS_REF_DIR}/{MANIFEST_FILE}"))
         if manifest.tag != "fmiReferences" or manifest.get(f"{{{_LS_NS}}}fmi-ls-name") != LS_REF_NAME:

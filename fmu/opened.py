@@ -49,6 +49,10 @@ class Selection:
     ``vrs``: the distinct value references to pass to a get/set call, in order; ``sizes``: the number of
     values behind each (1 for a scalar, the array's size in FMI 3.0); ``where``: the position of each
     requested name in the concatenated values (``values[where]`` is the request's order).
+
+    >>> sel = Selection(("q[2]", "q[1]"), vrs=(7,), sizes=(2,), where=(1, 0))   # FMI 3.0: one array q
+    >>> sel.total, sel.whole
+    (2, False)
     """
 
     names: tuple[str, ...]
@@ -231,6 +235,14 @@ class OpenedFmu:
         with zipfile.ZipFile(self.path) as zf:
             try:
                 return zf.read(name)
+            except KeyError:
+                return None
+
+    def member_size(self, name: str) -> int | None:
+        """The uncompressed size in bytes of archive member ``name`` (as its header declares it), or None."""
+        with zipfile.ZipFile(self.path) as zf:
+            try:
+                return zf.getinfo(name).file_size
             except KeyError:
                 return None
 

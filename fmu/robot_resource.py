@@ -15,7 +15,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import zipfile
 from pathlib import Path
 from typing import Any
 from model.errors import InputError
@@ -158,21 +157,22 @@ def _resource_text(fmu_path: str | Path) -> str | None:
     from model.description import RobotDescriptionError
     from model.limits import MAX_FILE_BYTES
 
-    from .archive import check_fmu_archive
+    from .opened import open_fmu
 
-    check_fmu_archive(fmu_path)
     where = f"{fmu_path}: {ROBOT_RESOURCE}"
-    with zipfile.ZipFile(fmu_path) as zf:
-        if ROBOT_RESOURCE not in zf.namelist():
+    with open_fmu(fmu_path, validate=False) as fmu:
+        size = fmu.member_size(ROBOT_RESOURCE)
+        if size is None:
             return None
-        size = zf.getinfo(ROBOT_RESOURCE).file_size
         if size > MAX_FILE_BYTES:
             raise RobotDescriptionError(f"{where}: {size} bytes: larger than the robot file size limit of "
                                         f"{MAX_FILE_BYTES} bytes")
-        try:
-            return zf.read(ROBOT_RESOURCE).decode()
-        except UnicodeDecodeError as exc:
-            raise RobotDescriptionError(f"{where}: not UTF-8 text (byte {exc.start})") from None
+        data = fmu.member(ROBOT_RESOURCE)
+    assert data is not None  # the member exists: its size was read
+    try:
+        return data.decode()
+    except UnicodeDecodeError as exc:
+        raise RobotDescriptionError(f"{where}: not UTF-8 text (byte {exc.start})") from None
 
 
 # ------------------------------------------------- the robot an FMU records
@@ -180,9 +180,10 @@ def _resource_text(fmu_path: str | Path) -> str | None:
 def _robot_node(fmu_path: str | os.PathLike[str]) -> Any:
     from defusedxml.ElementTree import fromstring  # no entities, no external references
 
-    from .archive import model_description_xml
+    from .opened import open_fmu
 
-    root = fromstring(model_description_xml(fmu_path))
+    with open_fmu(fmu_path, validate=False) as fmu:
+        root = fromstring(fmu.model_description_xml())
     node = root.find("./VendorAnnotations/Tool[@name='manipulator-workbench']/Robot")  # FMI 2.0
     if node is None:
         node = root.find("./Annotations/Annotation[@type='manipulator-workbench']/Robot")  # FMI 3.0

@@ -5,7 +5,7 @@ digital controller would send it): :func:`step_input` writes them as FMPy's
 step table (two rows at every switching time), so FMPy applies the value
 after the switch in Co-Simulation and raises a time event at every switch in
 Model Exchange. Results come back as a :class:`SimulationResult` of arrays.
-Every FMU passes :func:`fmu.archive.check_fmu_archive` before FMPy opens it.
+Every FMU is opened by :func:`fmu.opened.open_fmu` (the archive checked) before FMPy's ``simulate_fmu`` runs it.
 
 Names are the scalar names of the variable table (``tau_m[1]``, ``q[2]``) for
 FMI 2.0 and FMI 3.0 alike: for an FMI 3.0 FMU, whose joint vectors are array
@@ -20,11 +20,11 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from fmpy import read_model_description, simulate_fmu
+from fmpy import simulate_fmu
 
 from model.errors import InputError
 
-from .archive import check_fmu_archive, model_description_xml
+from .opened import OpenedFmu, open_fmu
 
 __all__ = ["SimulationResult", "step_input", "simulate_cs", "simulate_me", "variable_names", "fmi_version"]
 
@@ -46,34 +46,24 @@ class SimulationResult:
 
 
 def fmi_version(fmu_path: str | os.PathLike[str]) -> int:
-    """2 or 3: the major FMI version of the FMU's ``modelDescription.xml`` (its ``fmiVersion`` attribute).
+    """2 or 3: the major FMI version of the FMU (:attr:`fmu.opened.OpenedFmu.fmi_version`).
 
-    Read from the root element alone, so that a description FMPy's schema refuses still tells its version
-    (the schema check reports it); an unknown or missing version is 2, the one every FMI tool reads.
+    Read without FMPy's schema check, so that a description the schema refuses still tells its version
+    (the schema check reports it).
     """
-    from defusedxml.ElementTree import fromstring  # no entities, no external references
-
-    root = fromstring(model_description_xml(fmu_path))
-    return 3 if str(root.get("fmiVersion", "")).startswith("3.") else 2
+    with open_fmu(fmu_path, validate=False) as fmu:
+        return fmu.fmi_version
 
 
-def _sizes(fmu_path: str | os.PathLike[str]) -> dict[str, int]:
+def _sizes(fmu: OpenedFmu) -> dict[str, int]:
     """Number of elements of every variable (1 for a scalar) by name."""
-    md = read_model_description(str(fmu_path))
-    return {v.name: int(np.prod([d.start for d in v.dimensions])) if v.dimensions else 1 for v in md.modelVariables}
+    return {name: fmu.select([name]).total for name in fmu.variables}
 
 
 def variable_names(fmu_path: str | os.PathLike[str], causality: str) -> list[str]:
     """Scalar names of the FMU's variables of one causality (``q[1]`` .. for an FMI 3.0 array ``q``)."""
-    check_fmu_archive(fmu_path)
-    md = read_model_description(str(fmu_path))
-    names = []
-    for v in sorted(md.modelVariables, key=lambda v: v.valueReference):
-        if v.causality != causality:
-            continue
-        size = int(np.prod([d.start for d in v.dimensions])) if v.dimensions else 0
-        names += [f"{v.name}[{k}]" for k in range(1, size + 1)] if size else [v.name]
-    return names
+    with open_fmu(fmu_path) as fmu:
+        return fmu.names(causality)
 
 
 def _base(name: str) -> str:
@@ -96,14 +86,14 @@ def _array_inputs(table: np.ndarray | None, sizes: dict[str, int]) -> np.ndarray
     return out
 
 
-def _run(fmu_path: str | os.PathLike[str], names: list[str], inputs: np.ndarray | None, **kwargs) -> dict[str, np.ndarray]:
+def _run(fmu: OpenedFmu, names: list[str], inputs: np.ndarray | None, **kwargs) -> dict[str, np.ndarray]:
     """FMPy's simulate_fmu, with scalar names for FMI 2.0 and 3.0: {"time": t, name: values}."""
-    if fmi_version(fmu_path) < 3:
-        raw = simulate_fmu(str(fmu_path), input=inputs, output=names, **kwargs)
+    if fmu.fmi_version < 3:
+        raw = simulate_fmu(str(fmu.path), input=inputs, output=names, **kwargs)
         return {n: np.array(raw[n]) for n in ["time", *names]}
-    sizes = _sizes(fmu_path)
+    sizes = _sizes(fmu)
     bases = list(dict.fromkeys(_base(n) if sizes.get(_base(n), 1) > 1 else n for n in names))
-    raw = simulate_fmu(str(fmu_path), input=_array_inputs(inputs, sizes), output=bases, **kwargs)
+    raw = simulate_fmu(str(fmu.path), input=_array_inputs(inputs, sizes), output=bases, **kwargs)
     values = {"time": np.array(raw["time"])}
     for n in names:
         b = _base(n)
@@ -147,10 +137,10 @@ def simulate_cs(fmu_path: str | os.PathLike[str], stop_time: float, step: float,
                 inputs: np.ndarray | None = None, outputs: Sequence[str] | None = None,
                 start_values: dict[str, float] | None = None) -> SimulationResult:
     """Co-Simulation by FMPy with communication step ``step`` (s), outputs every step."""
-    check_fmu_archive(fmu_path)
-    names = list(outputs) if outputs is not None else variable_names(fmu_path, "output")
-    raw = _run(fmu_path, names, inputs, fmi_type="CoSimulation", stop_time=stop_time, output_interval=step,
-               start_values=start_values or {})
+    with open_fmu(fmu_path) as fmu:
+        names = list(outputs) if outputs is not None else fmu.names("output")
+        raw = _run(fmu, names, inputs, fmi_type="CoSimulation", stop_time=stop_time, output_interval=step,
+                   start_values=start_values or {})
     return _result(raw, names, "CoSimulation")
 
 
@@ -158,9 +148,9 @@ def simulate_me(fmu_path: str | os.PathLike[str], stop_time: float, output_inter
                 inputs: np.ndarray | None = None, outputs: Sequence[str] | None = None,
                 start_values: dict[str, float] | None = None, relative_tolerance: float = 1e-8) -> SimulationResult:
     """Model Exchange by FMPy with its CVode solver (BDF, Newton) at ``relative_tolerance``."""
-    check_fmu_archive(fmu_path)
-    names = list(outputs) if outputs is not None else variable_names(fmu_path, "output")
-    raw = _run(fmu_path, names, inputs, fmi_type="ModelExchange", solver="CVode", stop_time=stop_time,
-               output_interval=output_interval, relative_tolerance=relative_tolerance,
-               start_values=start_values or {})
+    with open_fmu(fmu_path) as fmu:
+        names = list(outputs) if outputs is not None else fmu.names("output")
+        raw = _run(fmu, names, inputs, fmi_type="ModelExchange", solver="CVode", stop_time=stop_time,
+                   output_interval=output_interval, relative_tolerance=relative_tolerance,
+                   start_values=start_values or {})
     return _result(raw, names, "ModelExchange")

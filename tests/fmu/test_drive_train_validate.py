@@ -29,7 +29,9 @@ def r3_default(tmp_path_factory):
 
     robot = load_robot("manutec_r3")
     path = fmu.export_fmu(robot, tmp_path_factory.mktemp("r3d") / "r3.fmu", platforms="linux64")
-    return robot, path, fmpy.read_model_description(path)
+    from fmu.opened import open_fmu
+
+    return robot, path, open_fmu(path).md
 
 
 def test_default_step_of_a_drive_train_robot(r3_default):

@@ -195,13 +195,15 @@ def test_value_references_agree_between_header_and_xml():
 @pytest.mark.needs("cmake")
 def test_rebuild_from_sources_with_fmpy_gives_the_same_results(tmp_path):
     """FMPy's `compile` path (CMake on sources/) rebuilds a binary that simulates identically."""
-    from fmpy import extract
     from fmpy.build import build_platform_binary
     from fmpy.util import create_zip_archive
 
     from fmu.simulate import simulate_cs
 
-    unzipped = Path(extract(str(scara_fmu()), unzipdir=str(tmp_path / "unzipped")))
+    from fmu.opened import open_fmu
+
+    with open_fmu(scara_fmu()) as opened:
+        unzipped = Path(opened.extract_to(tmp_path / "unzipped"))
     shutil.rmtree(unzipped / "binaries")
     (tmp_path / "cmake").mkdir()
     build_platform_binary(unzipped, build_dir=tmp_path / "cmake")

@@ -40,9 +40,9 @@ def _quiet(fn, *args, **kw):
 
 
 def _start_values(path):
-    from fmpy import read_model_description
+    from fmu.opened import open_fmu
 
-    return {v.name: float(v.start) for v in read_model_description(str(path)).modelVariables
+    return {v.name: float(v.start) for v in open_fmu(path).md.modelVariables
             if v.causality == "parameter" and v.start is not None}
 
 
@@ -124,9 +124,9 @@ def test_the_tool_outputs_are_in_the_world_frame_and_say_so(tmp_path):
     robot = _quiet(Robot, _quiet(load_description, toml))
     assert robot.description.base is not None
     path = _quiet(export_fmu, robot, tmp_path / "based.fmu")
-    from fmpy import read_model_description
+    from fmu.opened import open_fmu
 
-    described = {v.name: v.description for v in read_model_description(str(path)).modelVariables}
+    described = {v.name: v.description for v in open_fmu(path).md.modelVariables}
     assert "in the world frame W" in described["tool_position[1]"] and "not frame 0" in described["tool_position[1]"]
     assert "in the world frame W" in described["tool_rpy[3]"] and "R_WE" in described["tool_rpy[3]"]
     res = simulate_cs(path, 0.05, 1e-3, outputs=["q[1]", "q[2]", "tool_position[1]", "tool_position[2]",

@@ -36,27 +36,18 @@ def test_no_handwritten_copy_of_the_limits_is_left():
 
 
 def test_an_fmu_built_with_another_bound_enforces_that_bound(tmp_path, monkeypatch):
-    from fmpy import extract, read_model_description
-    from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave, fmi2Error
+    from fmpy.fmi2 import fmi2Error
 
     from fmu import export_trivial_fmu
+    from fmu.instance import FmuCallError
+    from fmu.opened import open_fmu
 
     monkeypatch.setattr(fmu.limits, "MAX_SUBSTEPS", 1000)
     path = export_trivial_fmu(tmp_path / "small_bound.fmu", step=1e-3)
-    with zipfile.ZipFile(path) as zf:
-        assert "#define MW_MAX_SUBSTEPS 1000ull" in zf.read("sources/mw_limits.h").decode()
-    md = read_model_description(str(path))
-    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path), unzipdir=str(tmp_path / "x")),
-                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bound")
-    slave.instantiate()
-    try:
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.exitInitializationMode()
-        slave.doStep(0.0, 1.0)                               # 1000 sub-steps of 1 ms: the most one call takes
-        with pytest.raises(FMICallException) as err:
-            slave.doStep(1.0, 1.001)                         # 1001: refused by this FMU, accepted under 1e6
+    with open_fmu(path) as opened, opened.instance("cs", "bound") as slave:
+        assert "#define MW_MAX_SUBSTEPS 1000ull" in opened.member("sources/mw_limits.h").decode()
+        slave.start(0.0)
+        slave.do_step(0.0, 1.0)                              # 1000 sub-steps of 1 ms: the most one call takes
+        with pytest.raises(FmuCallError) as err:
+            slave.do_step(1.0, 1.001)                        # 1001: refused by this FMU, accepted under 1e6
         assert err.value.status == fmi2Error
-    finally:
-        slave.freeInstance()

@@ -12,60 +12,39 @@ returned NaN with a Discard.
 
 from __future__ import annotations
 
-import ctypes
 
 import numpy as np
 import pytest
 
-from tests.support.fmu_support import LogRecorder, build_root, make_callbacks
+from tests.support.fmu_support import build_root
 from tests.support.singular_arm import spinner
 
 
 @pytest.fixture(scope="module")
 def spinner_fmu():
-    from fmpy import extract, read_model_description
-
     from fmu import export_fmu
+    from fmu.opened import open_fmu
 
-    path = export_fmu(spinner(as_payload=True), build_root() / "spinner.fmu")
-    return read_model_description(str(path)), extract(str(path), unzipdir=str(build_root() / "spinner_unzipped"))
+    with open_fmu(export_fmu(spinner(as_payload=True), build_root() / "spinner.fmu")) as fmu:
+        yield fmu
 
 
 def instance(spinner_fmu, kind: str):
-    from fmpy.fmi2 import FMU2Model, FMU2Slave
-
-    md, unzip = spinner_fmu
-    cls = FMU2Slave if kind == "cs" else FMU2Model
-    fmu = cls(guid=md.guid, unzipDirectory=unzip, modelIdentifier="spinner", instanceName=kind)
-    log = LogRecorder()
-    callbacks = make_callbacks(log)
-    fmu.instantiate(callbacks=callbacks)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    return fmu, vr, log, callbacks
+    """An instantiated :class:`fmu.instance.Instance` of interface ``kind``; its log is ``messages``."""
+    return spinner_fmu.instance(kind, kind).instantiate()
 
 
-def initialise(fmu, values=None) -> None:
-    """setupExperiment and initialisation with ``values`` ({value reference: value}) set in it."""
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    if values:
-        fmu.setReal(list(values), list(values.values()))
-    fmu.exitInitializationMode()
-
-
-def last_error(log, fn: str) -> str:
+def last_error(inst, fn: str) -> str:
     """The last logged message, checked to be ``fn``'s error."""
-    from fmpy.fmi2 import fmi2Error
-
-    status, category, message = log.messages[-1]
-    assert (status, category) == (fmi2Error, "logStatusError") and message.startswith(f"{fn}: "), message
+    status, category, message = inst.messages[-1]
+    assert (status, category) == ("Error", "logStatusError") and message.startswith(f"{fn}: "), message
     return message
 
 
 def raised_status(call, *args) -> int:
-    from fmpy.fmi1 import FMICallException
+    from fmu.instance import FmuCallError
 
-    with pytest.raises(FMICallException) as info:
+    with pytest.raises(FmuCallError) as info:
         call(*args)
     return int(info.value.status)
 
@@ -73,48 +52,36 @@ def raised_status(call, *args) -> int:
 def test_a_singular_start_state_is_refused_by_exit_initialization(spinner_fmu):
     from fmpy.fmi2 import fmi2Error
 
-    fmu, vr, log, _callbacks = instance(spinner_fmu, "cs")
-    try:
-        assert raised_status(initialise, fmu, {vr["q[2]"]: 0.0}) == fmi2Error
-        message = last_error(log, "fmi2ExitInitializationMode")
+    with instance(spinner_fmu, "cs") as fmu:
+        assert raised_status(fmu.start, 0.0, {"q[2]": 0.0}) == fmi2Error
+        message = last_error(fmu, "fmi2ExitInitializationMode")
         assert "the inertia matrix B(q) is singular at joint 1" in message and "q = [0, 0]" in message
-    finally:
-        fmu.freeInstance()
 
 
 def test_a_co_simulation_step_into_a_singular_plant_is_an_error_naming_the_joint(spinner_fmu):
     from fmpy.fmi2 import fmi2Error
 
-    fmu, vr, log, _callbacks = instance(spinner_fmu, "cs")
-    try:
-        initialise(fmu)
-        fmu.setReal([vr["tau_m[1]"]], [0.01])
-        fmu.doStep(0.0, 1e-3)                                         # negative control: with the payload it steps
-        before = np.array(fmu.getReal([vr["q[1]"], vr["q[2]"]]))
+    with instance(spinner_fmu, "cs") as fmu:
+        fmu.start(0.0)
+        fmu.set(["tau_m[1]"], [0.01])
+        fmu.do_step(0.0, 1e-3)                                        # negative control: with the payload it steps
+        before = fmu.get(["q[1]", "q[2]"])
         assert np.all(np.isfinite(before))
-        fmu.setReal([vr["payload_mass"]], [0.0])                      # tunable: joint 1 now moves no mass
-        assert raised_status(fmu.doStep, 1e-3, 1e-3) == fmi2Error
-        message = last_error(log, "fmi2DoStep")
+        fmu.set(["payload_mass"], [0.0])                              # tunable: joint 1 now moves no mass
+        assert raised_status(fmu.do_step, 1e-3, 1e-3) == fmi2Error
+        message = last_error(fmu, "fmi2DoStep")
         assert "the inertia matrix B(q) is singular at joint 1" in message
         assert "in the step from t = 0.001" in message and f"q = [{before[0]:.9g}, 0.3" in message
-    finally:
-        fmu.freeInstance()
 
 
 def test_model_exchange_derivatives_at_a_singular_state_are_an_error(spinner_fmu):
     from fmpy.fmi2 import fmi2Error
 
-    fmu, vr, log, _callbacks = instance(spinner_fmu, "me")
-    try:
-        initialise(fmu)
-        fmu.newDiscreteStates()
-        fmu.enterContinuousTimeMode()
-        dx = (ctypes.c_double * 4)()
-        fmu.getDerivatives(dx, 4)                                     # negative control: at the rest it is finite
-        assert np.all(np.isfinite(np.array(dx)))
-        fmu.setContinuousStates((ctypes.c_double * 4)(0.2, 0.0, 0.0, 0.0), 4)
-        assert raised_status(fmu.getDerivatives, dx, 4) == fmi2Error
-        message = last_error(log, "fmi2GetDerivatives")
+    with instance(spinner_fmu, "me") as fmu:
+        fmu.start(0.0)                                                # event iteration, continuous-time mode
+        dx = fmu.get_dx()                                             # negative control: at the rest it is finite
+        assert dx.size == 4 and np.all(np.isfinite(dx))
+        fmu.set_x(np.array([0.2, 0.0, 0.0, 0.0]))
+        assert raised_status(fmu.get_dx) == fmi2Error
+        message = last_error(fmu, "fmi2GetDerivatives")
         assert "the inertia matrix B(q) is singular at joint 1" in message and "q = [0.2, 0]" in message
-    finally:
-        fmu.freeInstance()

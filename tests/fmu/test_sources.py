@@ -78,23 +78,25 @@ int main(void) {
 
 
 def _md_facts(fmu_path: Path) -> tuple[str, str, int]:
-    from fmpy import read_model_description
+    from fmu.opened import open_fmu
 
-    md = read_model_description(str(fmu_path))
+    with open_fmu(fmu_path) as fmu:
+        md = fmu.md
     vr_tau = next(v.valueReference for v in md.modelVariables if v.name == "tau_m[1]")
     return md.coSimulation.modelIdentifier, md.guid, vr_tau
 
 
 def _compile_sources(cc: str, fmu_path: Path, prefix: str, work: Path) -> list[str]:
     """Compile every source file of the FMU's build description with FMI2_FUNCTION_PREFIX=prefix."""
-    from fmpy import read_model_description
+    from fmu.opened import open_fmu
 
     src = work / prefix
     with zipfile.ZipFile(fmu_path) as zf:
         for name in zf.namelist():
             if name.startswith("sources/"):
                 zf.extract(name, src)
-    md = read_model_description(str(fmu_path))
+    with open_fmu(fmu_path) as fmu:
+        md = fmu.md
     files = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
     objects = []
     flags = [f for f in CFLAGS if f not in ("-fPIC", "-Werror")]

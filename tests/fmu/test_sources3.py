@@ -90,9 +90,10 @@ def _fmu3(robot: str) -> Path:
 
 
 def _md_facts(fmu_path: Path) -> dict[str, object]:
-    from fmpy import read_model_description
+    from fmu.opened import open_fmu
 
-    md = read_model_description(str(fmu_path))
+    with open_fmu(fmu_path) as fmu:
+        md = fmu.md
     vr = {v.name: v.valueReference for v in md.modelVariables}
     n = sum(1 for v in md.modelVariables if v.name == "tau_m") and int(
         next(v for v in md.modelVariables if v.name == "tau_m").dimensions[0].start)
