@@ -15,9 +15,19 @@ arithmetic as :meth:`JointPath.batch`, generated into C) at the control instant 
 So an importer that sets the plant state sampled at ``t_j`` before the controller's step from
 ``t_j`` and reads ``tau_m`` after it runs the law of ``t_j`` on the state of ``t_j``: the loop
 of a Jacobi master (the torque reaches the plant one period late, :class:`~closed_loop.delay.OnePeriodDelay`).
+
+A law with its own sampled state ('pid': the integrator ``z``, ticked at the same period ``h``) shares the
+clock: one :class:`~fmu.variables.DiscreteStates` holds ``k``, ``z_out[i]`` and ``z[i]`` with one tick. At the
+start of the step from ``t_j`` (``k = j``) the tick runs the law's own update on the inputs held over that step
+and the reference at ``t_j``: ``z_out <- z`` (``z_j``), ``z <- z_next(q, qd, ref(t_j), z_j)`` (``z_{j+1}``),
+``k <- j + 1``; ``tau_m`` is the law on ``z_out``, so after the step it is the law of ``t_j`` with the
+integrator of ``t_j``, as :meth:`~control_design.controllers.LawController.update` computes it at ``t_j``
+(before any step ``z_out = z_0 = 0``).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
@@ -33,6 +43,7 @@ from .controller_fmu import controller_spec
 __all__ = ["reference_controller_spec", "path_at"]
 
 _REF_GROUPS = ("q_ref", "qd_ref", "qdd_ref")
+_CLOCK = Quantity("k", "1", "control periods since the start (the reference clock), sampled")
 
 
 def path_at(path: JointPath, t: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
@@ -64,43 +75,63 @@ def reference_controller_spec(controller: Controller, robot: Robot, trajectory: 
 
     Inputs ``q[i]``, ``qd[i]``; output ``tau_m[i]`` (N m); parameters those of
     :func:`~closed_loop.controller_fmu.controller_spec`; one sampled discrete state ``k`` (the
-    count of periods ``1 / rate_hz`` since the start, s); the reference at ``t0 + (k - 1) h``
-    (``t0`` the trajectory's start, s).
+    count of periods ``1 / rate_hz`` since the start); the reference at ``t0 + (k - 1) h``
+    (``t0`` the trajectory's start, s); 'pid' adds the sampled ``z_out[i]``, ``z[i]`` (motor rad s) on the
+    same clock (module docstring).
 
     Raises
     ------
     model.errors.InputError
-        A trajectory that is not a joint path (a Cartesian one is sampled first), a stateful law
-        ('pid': its integrator would need a second clock).
+        A trajectory that is not a joint path (a Cartesian one is sampled first), a law whose sampled
+        state has another period than the control period.
     """
     path = trajectory.path
     if not isinstance(path, JointPath):
         raise InputError(f"expected a joint-space trajectory (piecewise quintic), got {type(path).__name__}",
                          parameter="trajectory")
     base = controller_spec(controller, robot, model_identifier=model_identifier)
-    if base.discrete is not None:
-        raise InputError(f"the {controller.kind!r} law has its own sampled state; expected a stateless law",
-                         parameter="controller")
+    dt = float(controller.dt)
+    own = base.discrete
+    if own is not None and own.period != dt:
+        raise InputError(f"the {controller.kind!r} law's sampled state has the period {own.period!r} s, expected the "
+                         f"control period {dt!r} s", parameter="controller")
     n = robot.n
     names = [q.name for q in base.inputs]
     ref_count = sum(1 for nm in names if nm.split("[")[0] in _REF_GROUPS)
     groups = [g for g in _REF_GROUPS if f"{g}[1]" in names]
     measured = base.inputs[ref_count:]
+    nz = 0 if own is None else len(own.states)
     x = ca.SX.sym("x", 0)
     u = ca.SX.sym("u", len(measured))
     p = ca.SX.sym("p", base.p_start.size)
-    d = ca.SX.sym("d", 1)
-    dt = float(controller.dt)
-    t = path.t_start + ca.fmax(d[0] - 1.0, 0.0) * dt
-    signals = dict(zip(_REF_GROUPS, path_at(path, t)))
-    ref = ca.vertcat(*[signals[g] for g in groups])
-    assert ref.numel() == ref_count == len(groups) * n
-    tau = base.out(x, ca.vertcat(ref, u), p)
+    d = ca.SX.sym("d", 1 + 2 * nz)  # k, then (with a sampled law) z_out and z
+
+    def law_input(k: ca.SX) -> ca.SX:
+        signals = dict(zip(_REF_GROUPS, path_at(path, path.t_start + k * dt)))
+        ref = ca.vertcat(*[signals[g] for g in groups])
+        assert ref.numel() == ref_count == len(groups) * n
+        return ca.vertcat(ref, u)
+
+    k_out = ca.fmax(d[0] - 1.0, 0.0)  # the instant the last step started (t_0 before any step)
+    if own is None:
+        tau = base.out(x, law_input(k_out), p)
+        d_next = d + 1.0
+        states = (_CLOCK,)
+        start = np.zeros(1)
+    else:
+        z_out, z = d[1:1 + nz], d[1 + nz:]
+        tau = base.out(x, law_input(k_out), p, z_out)
+        d_next = ca.vertcat(d[0] + 1.0, z, own.tick(x, law_input(d[0]), p, z))
+        states = (_CLOCK,) + tuple(
+            replace(s, name=s.name.replace("z[", "z_out[", 1),
+                    description=s.description.replace(", sampled", "") + ", the one tau_m uses (of the instant the "
+                                                                          "last step started), sampled")
+            for s in own.states) + own.states
+        start = np.concatenate([np.zeros(1), own.start, own.start])
     ode = ca.Function("ode", [x, u, p, d], [ca.SX(0, 1)], ["x", "u", "p", "d"], ["xdot"])
     out = ca.Function("out", [x, u, p, d], [tau], ["x", "u", "p", "d"], ["y"])
-    tick = ca.Function("tick", [x, u, p, d], [d + 1.0], ["x", "u", "p", "d"], ["d_next"])
-    clock = DiscreteStates((Quantity("k", "1", "control periods since the start (the reference clock), sampled"),),
-                           np.zeros(1), dt, tick)
+    tick = ca.Function("tick", [x, u, p, d], [d_next], ["x", "u", "p", "d"], ["d_next"])
+    clock = DiscreteStates(states, start, dt, tick)
     return ModelSpec(
         model_identifier=base.model_identifier + "_ref",
         model_name=base.model_name + " with its reference",

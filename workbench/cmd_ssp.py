@@ -87,7 +87,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                                  "reference, parameter variants) as an SSP 1.0 file")
     p.add_argument("robot", help="built-in robot name or TOML file")
     p.add_argument("--controller", default="pd", metavar="KIND",
-                   help="pd, pd-g, pd-ff or ct (stateless laws; default pd)")
+                   help="pd, pd-g, pd-ff, pid or ct (default pd)")
     p.add_argument("--bandwidth", type=float, default=None, metavar="RAD_S", help="closed-loop bandwidth, rad/s")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--damping", type=float, default=None, metavar="Z", help="damping ratio (default 0.7)")

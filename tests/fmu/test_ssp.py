@@ -1,6 +1,7 @@
 """The closed loop as an SSP 1.0 file: libcosim and FMPy run it and reproduce the compiled closed loop.
 
-The SCARA pick-and-place (15 s, 1 kHz) under computed torque, exported with a 2 kg payload variant
+The SCARA pick-and-place (15 s, 1 kHz) under computed torque, and under PID (its integrator a sampled state on the
+reference's clock, :mod:`closed_loop.reference_controller`), exported with a 2 kg payload variant
 (:func:`closed_loop.ssp_loop.export_loop_ssp`), is run unchanged by libcosim
 (``CosimExecution.from_ssp_file``, one ``.ssd`` per parameter set) and FMPy
 (``fmpy.ssp.simulation.simulate_ssp``, the set passed as read from its ``.ssv``), and compared at every control
@@ -12,7 +13,10 @@ law in compiled C, so only rounding separates them (measured ~4e-15).
 
 Negative controls: the 2 kg set differs from the nominal one by far more than the tolerance (and matches the plant
 of ``manip track --payload 2``); the compiled loop on the *other* importer's start schedule misses by far more than
-the tolerance, so the comparison sees the schedule; the reference inside the controller FMU is the trajectory's.
+the tolerance, so the comparison sees the schedule; the reference inside the controller FMU is the trajectory's;
+under PID the compiled loop without the integrator (Ki = 0) misses by far more than the tolerance (and the integrator
+of the next period in tau_m instead of this one's, tried by hand, misses by 3e-5 rad), so the FMU's integrator is
+the controller's, tick for tick.
 """
 
 from __future__ import annotations
@@ -29,13 +33,15 @@ from closed_loop.simulate import simulate_tracking
 from closed_loop.ssp_loop import (NOTES, SSP_TOLERANCE, LoopSpec, LoopVariant, compiled_reference, export_loop_ssp,
                                   loop_parts, validate_loop_ssp, variant_plant)
 from control_design.computed_torque import ModelMismatch, plant_with_mismatch
+from control_design.controllers import DecentralisedController
 from fmu.ssp import NOMINAL, SspComponent, SspConnection, read_parameter_set, run_fmpy, run_libcosim, ssp_variants, \
     write_ssp
 from model import InertiaConsistencyWarning, load_robot
 from model.errors import InputError
 
 PAYLOAD = LoopVariant("payload_mass=2", {"payload_mass": 2.0})
-SPEC = LoopSpec(kind="ct", task="pick-and-place", variants=(PAYLOAD,))
+SPECS = {kind: LoopSpec(kind=kind, task="pick-and-place", variants=(PAYLOAD,)) for kind in ("ct", "pid")}
+SPEC = SPECS["ct"]
 Q = [f"plant.q[{i + 1}]" for i in range(4)]
 
 
@@ -47,15 +53,30 @@ def robot():
 
 
 @pytest.fixture(scope="module")
-def parts(robot):
-    return loop_parts(robot, SPEC)
+def loops(robot, tmp_path_factory):
+    """kind -> (controller, trajectory, SSP) of :data:`SPECS`, each built once, when first asked for."""
+    built: dict[str, tuple] = {}
+
+    def loop(kind: str) -> tuple:
+        if kind not in built:
+            spec = SPECS[kind]
+            controller, trajectory = loop_parts(robot, spec)
+            path = tmp_path_factory.mktemp(f"ssp_{kind}") / "loop.ssp"
+            built[kind] = (controller, trajectory,
+                           export_loop_ssp(robot, controller, trajectory, path, variants=spec.variants, notes=spec))
+        return built[kind]
+
+    return loop
 
 
 @pytest.fixture(scope="module")
-def ssp(robot, parts, tmp_path_factory):
-    controller, trajectory = parts
-    path = tmp_path_factory.mktemp("ssp") / "loop.ssp"
-    return export_loop_ssp(robot, controller, trajectory, path, variants=SPEC.variants, notes=SPEC)
+def parts(loops):
+    return loops("ct")[:2]
+
+
+@pytest.fixture(scope="module")
+def ssp(loops):
+    return loops("ct")[2]
 
 
 def test_the_archive_is_ssp_1_0_with_one_ssd_per_parameter_set(ssp):
@@ -79,8 +100,9 @@ def test_the_archive_is_ssp_1_0_with_one_ssd_per_parameter_set(ssp):
 
 @pytest.mark.parametrize("importer", ["libcosim", "fmpy"])
 @pytest.mark.parametrize("variant", [NOMINAL, "payload_mass=2"])
-def test_each_importer_reproduces_the_compiled_loop(importer, variant, robot, parts, ssp):
-    controller, trajectory = parts
+@pytest.mark.parametrize("kind", ["ct", "pid"])
+def test_each_importer_reproduces_the_compiled_loop(kind, importer, variant, robot, loops):
+    controller, trajectory, ssp = loops(kind)
     plant = variant_plant(robot, {} if variant == NOMINAL else PAYLOAD.values)
     ref = compiled_reference(robot, plant, controller, trajectory, importer)
     assert ref.t.size == 15001
@@ -92,6 +114,11 @@ def test_each_importer_reproduces_the_compiled_loop(importer, variant, robot, pa
     assert np.max(np.abs(q - ref.q[1:])) <= SSP_TOLERANCE
     other = compiled_reference(robot, plant, controller, trajectory, "fmpy" if importer == "libcosim" else "libcosim")
     assert np.max(np.abs(q - other.q[1:])) > 1e3 * SSP_TOLERANCE  # negative control: the start schedule matters
+    if kind == "pid":  # negative control: the FMU integrates (the same PID with Ki = 0 is far off)
+        c = controller
+        no_integral = DecentralisedController("pid", c.Kp, c.Kd, np.zeros(4), c.G, c.rate_hz, c.tau_m_max)
+        plain = compiled_reference(robot, plant, no_integral, trajectory, importer)
+        assert np.max(np.abs(q - plain.q[1:])) > 1e3 * SSP_TOLERANCE
 
 
 def test_the_payload_set_is_its_own_run_on_the_plant_of_track_payload(robot, parts, ssp):
@@ -110,8 +137,9 @@ def test_the_payload_set_is_its_own_run_on_the_plant_of_track_payload(robot, par
     assert np.max(np.abs(loaded - track.q[1:])) < 1e-4 < np.max(np.abs(nominal - track.q[1:]))
 
 
-def test_validate_loop_ssp_reports_every_run(ssp):
-    checks = validate_loop_ssp(ssp)
+@pytest.mark.parametrize("kind", ["ct", "pid"])
+def test_validate_loop_ssp_reports_every_run(kind, loops):
+    checks = validate_loop_ssp(loops(kind)[2])
     assert [(c.variant, c.importer) for c in checks] == [(v, i) for v in (NOMINAL, "payload_mass=2")
                                                          for i in ("libcosim", "fmpy")]
     assert all(c.ok and c.samples == 15000 for c in checks)

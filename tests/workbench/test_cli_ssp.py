@@ -55,7 +55,7 @@ def test_a_tampered_parameter_set_fails_validation(ssp, tmp_path):
     (["--variant", "payload=2"], "no plant parameter 'payload'"),
     (["--variant", "payload_mass"], "expected NAME=VALUE"),
     (["--variant", "payload_mass=-1"], "payload"),
-    (["--controller", "pid"], "stateless"),
+    (["--controller", "lqr"], "expected one of"),
     (["-o", "loop.zip"], "ending in .ssp"),
 ])
 def test_bad_input_is_one_line_exit_2(argv, needle, tmp_path, monkeypatch):
