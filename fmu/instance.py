@@ -15,14 +15,14 @@ check and convert its exception here.
 from __future__ import annotations
 
 import ctypes
-from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
 from model.errors import InputError, ToolchainError
 
-if TYPE_CHECKING:
-    from .opened import OpenedFmu, Selection
+from .selection import Selection
+
 
 __all__ = ["FmuCallError", "Instance"]
 
@@ -52,7 +52,8 @@ class Instance:
     terminates and frees whatever state the instance reached, and is safe to call twice.
     """
 
-    def __init__(self, fmu: "OpenedFmu", kind: str, name: str, *, logging_on: bool = False) -> None:
+    def __init__(self, fmu: Any, kind: str, name: str, *, logging_on: bool = False) -> None:
+        # fmu: the fmu.opened.OpenedFmu (not imported here: opened imports this module)
         self.fmu = fmu
         self.kind = kind
         self.name = name
@@ -204,12 +205,10 @@ class Instance:
 
     # ------------------------------------------------------------------ values
 
-    def _sel(self, names: Sequence[str] | "Selection") -> "Selection":
-        from .opened import Selection
-
+    def _sel(self, names: Sequence[str] | Selection) -> Selection:
         return names if isinstance(names, Selection) else self.fmu.select(list(names))
 
-    def get(self, names: Sequence[str] | "Selection") -> np.ndarray:
+    def get(self, names: Sequence[str] | Selection) -> np.ndarray:
         """The float64 values of scalar ``names``, in their order."""
         sel = self._sel(names)
         if self.fmi3:
@@ -218,7 +217,7 @@ class Instance:
             raw = np.array(self.call("getReal", list(sel.vrs)), dtype=float)
         return raw if sel.whole else raw[list(sel.where)]
 
-    def set(self, names: Sequence[str] | "Selection", values: Sequence[float] | np.ndarray) -> None:
+    def set(self, names: Sequence[str] | Selection, values: Sequence[float] | np.ndarray) -> None:
         """Set scalar ``names`` to ``values`` (an FMI 3.0 array partly named keeps its other elements)."""
         sel = self._sel(names)
         vals = np.asarray(values, dtype=float).ravel()
@@ -233,10 +232,8 @@ class Instance:
         else:
             self.call("setReal", list(sel.vrs), [float(v) for v in vals])
 
-    def _whole(self, sel: "Selection") -> "Selection":
+    def _whole(self, sel: Selection) -> Selection:
         """The selection of every element of the arrays behind ``sel``."""
-        from .opened import Selection
-
         return Selection(tuple(f"#{i}" for i in range(sel.total)), sel.vrs, sel.sizes, tuple(range(sel.total)))
 
     def reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:

@@ -18,7 +18,6 @@ call raises :class:`fmu.instance.FmuCallError`.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Sequence
 
 import numpy as np
@@ -27,7 +26,7 @@ from model.errors import InputError
 
 from .opened import OpenedFmu, open_fmu
 from .reference import DIVERGENCE_GAIN
-from .report import Check
+from .report import Check, RoundTrip, TrackingError
 
 if TYPE_CHECKING:
     from .instance import Instance
@@ -59,35 +58,6 @@ FD_LADDER = 4
 
 
 # ---------------------------------------------------------------- tracking
-
-@dataclass(frozen=True)
-class TrackingError:
-    """Largest deviation of an FMU run from the reference over the horizon, per joint, and the motion scales.
-
-    ``q``, ``qd`` (per joint) and ``tool_position`` are absolute; ``*_scale`` are the
-    largest joint excursion, joint speed and tool excursion of the reference, by
-    which :attr:`relative` divides them.
-    """
-
-    label: str
-    horizon: float
-    q: np.ndarray
-    qd: np.ndarray
-    tool_position: float
-    q_scale: float = 1.0
-    qd_scale: float = 1.0
-    p_scale: float = 1.0
-
-    @property
-    def relative(self) -> dict[str, float]:
-        """Largest errors over the motion scales: keys ``q``, ``qd``, ``tool``."""
-        return {"q": float(self.q.max()) / self.q_scale, "qd": float(self.qd.max()) / self.qd_scale,
-                "tool": self.tool_position / self.p_scale}
-
-    def line(self) -> str:
-        return (f"{self.label:<28} max|q - q_ref| = {self.q.max():.3e}   max|qd - qd_ref| = {self.qd.max():.3e}   "
-                f"max|p_tool - p_ref| = {self.tool_position:.3e} m   (over {self.horizon:g} s)")
-
 
 def _scale(x: float) -> float:
     """A motion scale, kept off zero for an arm that does not move (1e-9 of the unit)."""
@@ -127,22 +97,6 @@ def tracking_checks(e: TrackingError, kind: str, bound: float, basis: str) -> li
 
 
 # ------------------------------------------------------------- FMU states
-
-@dataclass(frozen=True)
-class RoundTrip:
-    """FMU-state round trips of a Co-Simulation run (bit-for-bit comparisons)."""
-
-    steps_before: int
-    steps_after: int
-    serialized_size: int
-    get_set_identical: bool
-    deserialized_identical: bool
-    me_identical: bool
-
-    @property
-    def ok(self) -> bool:
-        return self.get_set_identical and self.deserialized_identical and self.me_identical
-
 
 def state_roundtrip(fmu_path: str | os.PathLike[str], inputs: Callable[[float], Sequence[float]],
                     input_names: Sequence[str], output_names: Sequence[str], step: float = 1e-3,

@@ -1,12 +1,12 @@
 """One opened FMU: the archive checked once, its model description, its variables by name, its extracted folder.
 
 Every module that reads a user's FMU (validation, the closed-loop masters, the controller FMUs, the FMPy
-and libcosim runs, the tests) opens it here and nowhere else:
+and libcosim runs, the tests) opens it here and nowhere else::
 
->>> with open_fmu("puma560.fmu") as fmu:                      # doctest: +SKIP
-...     fmu.fmi_version, fmu.interfaces, fmu.select(["q[1]", "q[2]"]).vrs
-...     with fmu.instance("cs", "plant") as inst:              # an fmu.instance.Instance
-...         inst.start(0.0)
+    with open_fmu("puma560.fmu") as fmu:                 # an OpenedFmu
+        fmu.fmi_version, fmu.interfaces, fmu.select(["q[1]", "q[2]"]).vrs
+        with fmu.instance("cs", "plant") as inst:        # an fmu.instance.Instance
+            inst.start(0.0)
 
 :func:`open_fmu` runs :func:`fmu.archive.check_fmu_archive` (limits, paths, links, zip bombs) before FMPy
 reads ``modelDescription.xml``, so a hostile archive is refused before anything is parsed with FMPy or
@@ -23,7 +23,6 @@ import os
 import shutil
 import tempfile
 import zipfile
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
@@ -32,6 +31,7 @@ import numpy as np
 from model.errors import InputError
 
 from .archive import MODEL_DESCRIPTION, check_fmu_archive
+from .selection import Selection
 
 if TYPE_CHECKING:
     from .instance import Instance
@@ -40,35 +40,6 @@ __all__ = ["OpenedFmu", "Selection", "open_fmu"]
 
 #: The interface names of this module: Co-Simulation and Model Exchange.
 KINDS = ("cs", "me")
-
-
-@dataclass(frozen=True)
-class Selection:
-    """Scalar names resolved to value references.
-
-    ``vrs``: the distinct value references to pass to a get/set call, in order; ``sizes``: the number of
-    values behind each (1 for a scalar, the array's size in FMI 3.0); ``where``: the position of each
-    requested name in the concatenated values (``values[where]`` is the request's order).
-
-    >>> sel = Selection(("q[2]", "q[1]"), vrs=(7,), sizes=(2,), where=(1, 0))   # FMI 3.0: one array q
-    >>> sel.total, sel.whole
-    (2, False)
-    """
-
-    names: tuple[str, ...]
-    vrs: tuple[int, ...]
-    sizes: tuple[int, ...]
-    where: tuple[int, ...]
-
-    @property
-    def total(self) -> int:
-        """Number of values a get call over :attr:`vrs` returns."""
-        return int(sum(self.sizes))
-
-    @property
-    def whole(self) -> bool:
-        """True when the names are whole variables in order (a set call may pass the values as they are)."""
-        return self.where == tuple(range(self.total))
 
 
 def _size(variable: Any) -> int:

@@ -4,12 +4,57 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
+
+import numpy as np
 
 from .reference import DIVERGENCE_GAIN
 
-if TYPE_CHECKING:
-    from .numeric_checks import RoundTrip, TrackingError
+
+@dataclass(frozen=True)
+class TrackingError:
+    """Largest deviation of an FMU run from the reference over the horizon, per joint, and the motion scales.
+
+    ``q``, ``qd`` (per joint) and ``tool_position`` are absolute; ``*_scale`` are the
+    largest joint excursion, joint speed and tool excursion of the reference, by
+    which :attr:`relative` divides them.
+    """
+
+    label: str
+    horizon: float
+    q: np.ndarray
+    qd: np.ndarray
+    tool_position: float
+    q_scale: float = 1.0
+    qd_scale: float = 1.0
+    p_scale: float = 1.0
+
+    @property
+    def relative(self) -> dict[str, float]:
+        """Largest errors over the motion scales: keys ``q``, ``qd``, ``tool``."""
+        return {"q": float(self.q.max()) / self.q_scale, "qd": float(self.qd.max()) / self.qd_scale,
+                "tool": self.tool_position / self.p_scale}
+
+    def line(self) -> str:
+        return (f"{self.label:<28} max|q - q_ref| = {self.q.max():.3e}   max|qd - qd_ref| = {self.qd.max():.3e}   "
+                f"max|p_tool - p_ref| = {self.tool_position:.3e} m   (over {self.horizon:g} s)")
+
+
+@dataclass(frozen=True)
+class RoundTrip:
+    """FMU-state round trips of a Co-Simulation run (bit-for-bit comparisons)."""
+
+    steps_before: int
+    steps_after: int
+    serialized_size: int
+    get_set_identical: bool
+    deserialized_identical: bool
+    me_identical: bool
+
+    @property
+    def ok(self) -> bool:
+        return self.get_set_identical and self.deserialized_identical and self.me_identical
+
 
 __all__ = ["Check", "ValidationReport", "failed_check"]
 
