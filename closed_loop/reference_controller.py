@@ -12,6 +12,9 @@ arithmetic as :meth:`JointPath.batch`, generated into C) at the control instant 
   (``k = j``) it is the law at the instant the step started, ``t_{j-1}``, with the measured state the
   importer set before that step; before any step (``k = 0``) at ``t_0``.
 
+A path of more than :data:`MAX_SYMBOLIC_PIECES` pieces (a trajectory file: one per sample) is tabulated
+instead, at the control instants (:func:`table_at`).
+
 So an importer that sets the plant state sampled at ``t_j`` before the controller's step from
 ``t_j`` and reads ``tau_m`` after it runs the law of ``t_j`` on the state of ``t_j``: the loop
 of a Jacobi master (the torque reaches the plant one period late, :class:`~closed_loop.delay.OnePeriodDelay`).
@@ -28,6 +31,7 @@ integrator of ``t_j``, as :meth:`~control_design.controllers.LawController.updat
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Callable
 
 import casadi as ca
 import numpy as np
@@ -40,9 +44,12 @@ from model.trajectory import JointPath, Trajectory, _basis
 
 from .controller_fmu import controller_spec
 
-__all__ = ["reference_controller_spec", "path_at"]
+__all__ = ["reference_controller_spec", "path_at", "table_at", "MAX_SYMBOLIC_PIECES"]
 
 _REF_GROUPS = ("q_ref", "qd_ref", "qdd_ref")
+#: A path of more pieces than this is tabulated at the control instants (:func:`table_at`): a trajectory file
+#: (``manip retime``, ``manip excite``) has one piece per sample, thousands, and :func:`path_at`'s C grows with them.
+MAX_SYMBOLIC_PIECES = 200
 _CLOCK = Quantity("k", "1", "control periods since the start (the reference clock), sampled")
 
 
@@ -67,6 +74,33 @@ def path_at(path: JointPath, t: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
         result = tuple(ca.if_else(upper, pc, r) for pc, r in zip(piece, result))
     before = t < float(b[0])
     return tuple(ca.if_else(before, s0, r) for s0, r in zip((q_start, zero, zero), result))  # type: ignore[return-value]
+
+
+def table_at(robot: Robot, trajectory: Trajectory, dt: float) -> Callable[[ca.SX], tuple[ca.SX, ca.SX, ca.SX]]:
+    """``k -> `` position, velocity and acceleration (n x 1 SX each) of ``trajectory`` at the control instant
+    ``t0 + k dt`` (``k`` a symbolic whole number >= 0 of periods ``dt``, s), looked up in a table.
+
+    The table holds the reference :class:`~closed_loop.schedule.Schedule` samples at ``t0 + j dt``
+    (``j = 0 .. N``, the numbers ``manip track`` runs on, :meth:`JointPath.batch`) and one row after the end
+    (the end position at rest); ``k`` past it is clipped to it. It is a linear interpolant on the integers
+    0 .. N + 1 (:func:`casadi.interpolant`, its data generated into the C), read at whole ``k`` only, where
+    its weights are exactly 0 and 1: the lookup returns the samples bit for bit.
+    """
+    from .schedule import Schedule
+
+    path = trajectory.path
+    sched = Schedule.build(robot, trajectory, dt, substeps=1)
+    after = path.batch([path.t_start + (sched.steps + 1) * dt])
+    rows = np.hstack([np.vstack([a, b]) for a, b in zip((sched.q_ref, sched.qd_ref, sched.qdd_ref), after)])
+    grid = np.arange(rows.shape[0], dtype=float)
+    table = ca.interpolant("reference_table", "linear", [grid], rows.ravel().tolist())
+    n = path.n
+
+    def at(k: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+        y = table(ca.fmin(k, grid[-1]))
+        return y[:n], y[n:2 * n], y[2 * n:]
+
+    return at
 
 
 def reference_controller_spec(controller: Controller, robot: Robot, trajectory: Trajectory, *,
@@ -106,8 +140,11 @@ def reference_controller_spec(controller: Controller, robot: Robot, trajectory: 
     p = ca.SX.sym("p", base.p_start.size)
     d = ca.SX.sym("d", 1 + 2 * nz)  # k, then (with a sampled law) z_out and z
 
+    tabulated = table_at(robot, trajectory, dt) if path.breaks.size - 1 > MAX_SYMBOLIC_PIECES else None
+
     def law_input(k: ca.SX) -> ca.SX:
-        signals = dict(zip(_REF_GROUPS, path_at(path, path.t_start + k * dt)))
+        at = path_at(path, path.t_start + k * dt) if tabulated is None else tabulated(k)
+        signals = dict(zip(_REF_GROUPS, at))
         ref = ca.vertcat(*[signals[g] for g in groups])
         assert ref.numel() == ref_count == len(groups) * n
         return ca.vertcat(ref, u)

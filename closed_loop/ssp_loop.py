@@ -47,7 +47,8 @@ from .schedule import Schedule
 from .simulate import simulate_tracking
 
 __all__ = ["LoopVariant", "LoopSpec", "FmpyStart", "export_loop_ssp", "loop_parts", "variant_plant",
-           "compiled_reference", "validate_loop_ssp", "SspCheck", "IMPORTERS", "SSP_TOLERANCE", "NOTES"]
+           "compiled_reference", "validate_loop_ssp", "SspCheck", "IMPORTERS", "SSP_TOLERANCE", "NOTES", "loop_reference",
+           "REFERENCE_FILE"]
 
 #: Largest joint-angle difference (rad, or m for a prismatic joint) allowed between an importer's run of the SSP and
 #: the compiled closed loop on its schedule, at every control instant. Both integrate the same plant by the same
@@ -56,6 +57,9 @@ __all__ = ["LoopVariant", "LoopSpec", "FmpyStart", "export_loop_ssp", "loop_part
 SSP_TOLERANCE = 1e-9
 #: The archive path of the exporter's notes: how to rebuild the controller and the trajectory.
 NOTES = "resources/workbench_loop.json"
+
+#: The archive path (without its suffix, which is the file's own) of the copy of a waypoint or trajectory file.
+REFERENCE_FILE = "resources/reference"
 
 #: The importers :func:`compiled_reference` knows the start of.
 IMPORTERS = ("libcosim", "fmpy")
@@ -95,8 +99,10 @@ def variant_plant(robot: Robot, values: Mapping[str, float]) -> Robot:
 @dataclass(frozen=True)
 class LoopSpec:
     """What a loop SSP is exported from, besides the robot: the design (:func:`control_design.design_robot`'s
-    ``kind``, ``bandwidth`` rad/s, ``damping``, ``phase_margin`` deg, ``rate_hz``), the task (``task``, ``segment_time``
-    s, as :func:`control_design.reference.task_trajectory` takes them) and the plant variants."""
+    ``kind``, ``bandwidth`` rad/s, ``damping``, ``phase_margin`` deg, ``rate_hz``), the reference as ``manip track``
+    takes it (``task``, or a ``waypoints`` file, TOML or CSV, with ``segment_time`` s; or a ``trajectory`` file,
+    CSV, :mod:`model.trajectory_file`) and the plant variants. In the SSP's :data:`NOTES` a file is named by its
+    copy in the archive (:data:`REFERENCE_FILE` and its suffix)."""
 
     kind: str
     bandwidth: float | None = None
@@ -106,11 +112,18 @@ class LoopSpec:
     task: str | None = None
     segment_time: float | None = None
     variants: tuple[LoopVariant, ...] = ()
+    waypoints: str | None = None
+    trajectory: str | None = None
+
+    @property
+    def reference_file(self) -> str | None:
+        """The waypoint or trajectory file, if the reference is one."""
+        return self.waypoints if self.waypoints is not None else self.trajectory
 
     def as_json(self) -> str:
         """The spec as JSON (the SSP's :data:`NOTES`)."""
         data = {k: getattr(self, k) for k in ("kind", "bandwidth", "damping", "phase_margin", "rate_hz", "task",
-                                               "segment_time")}
+                                               "segment_time", "waypoints", "trajectory")}
         data["variants"] = [{"name": v.name, "values": dict(v.values)} for v in self.variants]
         return json.dumps(data, indent=2, allow_nan=False) + "\n"
 
@@ -127,14 +140,42 @@ class LoopSpec:
                              parameter="ssp") from None
 
 
-def loop_parts(robot: Robot, spec: LoopSpec) -> tuple[Controller, Trajectory]:
-    """The controller (designed on ``robot``, saturated) and the trajectory of ``spec``."""
-    from control_design.decentralised import DEFAULT_BANDWIDTH
-    from control_design.design import DEFAULT_RATE_HZ, design_robot
+def loop_reference(robot: Robot, spec: LoopSpec) -> Trajectory:
+    """The trajectory of ``spec``, read as ``manip track`` reads its ``--task``, ``--waypoints`` or ``--trajectory``
+    (:func:`~control_design.reference.task_trajectory`, :func:`~model.trajectory_file.read_trajectory`, then
+    :func:`~control_design.reference.check_trajectory_limits`): the same trajectory, the same one-line errors.
+
+    Raises
+    ------
+    control_design.errors.DesignSpecError
+        A trajectory file with a segment time, both files.
+    model.tasks.WaypointError, model.trajectory_file.TrajectoryFileError
+        A bad file (naming it, the line and the joint).
+    """
+    from control_design.errors import DesignSpecError
     from control_design.reference import check_trajectory_limits, task_trajectory
 
-    traj = task_trajectory(robot, spec.task, None, spec.segment_time)
+    if spec.waypoints is not None and spec.trajectory is not None:
+        raise DesignSpecError("expected a waypoint file or a trajectory file, not both", parameter="trajectory")
+    if spec.trajectory is not None:
+        from model.trajectory_file import read_trajectory
+
+        if spec.segment_time is not None:
+            raise DesignSpecError("a --trajectory file carries its own times; give one or the other",
+                                  parameter="segment_time")
+        traj = read_trajectory(spec.trajectory, robot.description)
+    else:
+        traj = task_trajectory(robot, spec.task, spec.waypoints, spec.segment_time)
     check_trajectory_limits(robot, traj)
+    return traj
+
+
+def loop_parts(robot: Robot, spec: LoopSpec) -> tuple[Controller, Trajectory]:
+    """The controller (designed on ``robot``, saturated) and the trajectory (:func:`loop_reference`) of ``spec``."""
+    from control_design.decentralised import DEFAULT_BANDWIDTH
+    from control_design.design import DEFAULT_RATE_HZ, design_robot
+
+    traj = loop_reference(robot, spec)
     rate = DEFAULT_RATE_HZ if spec.rate_hz is None else spec.rate_hz
     design = design_robot(robot, spec.kind, DEFAULT_BANDWIDTH if spec.bandwidth is None else spec.bandwidth,
                           spec.damping, phase_margin=spec.phase_margin, rate_hz=rate, analyse=False)
@@ -219,9 +260,16 @@ def export_loop_ssp(robot: Robot, controller: Controller, trajectory: Trajectory
                       SspComponent("controller", ctrl_fmu, tuple(x), tuple(tau), {})]
         connections = [SspConnection("plant", v, "controller", v) for v in x] + \
                       [SspConnection("controller", v, "plant", v) for v in tau]
+        extra: dict[str, str | bytes] = {}
+        if notes is not None:
+            source = notes.reference_file
+            if source is not None:
+                copy = REFERENCE_FILE + Path(source).suffix.lower()
+                extra[copy] = Path(source).read_bytes()
+                notes = replace(notes, **{"waypoints" if notes.waypoints is not None else "trajectory": copy})
+            extra[NOTES] = notes.as_json()
         return write_ssp(path, f"{robot.name} {controller.kind} closed loop", components, connections,
-                         start=float(sched.t[0]), stop=float(sched.t[-1]), step=dt,
-                         extra={} if notes is None else {NOTES: notes.as_json()})
+                         start=float(sched.t[0]), stop=float(sched.t[-1]), step=dt, extra=extra)
 
 
 def _fmu_start(robot: Robot, dt: float) -> np.ndarray:
@@ -283,9 +331,17 @@ def validate_loop_ssp(path: str | os.PathLike[str], *, importers: tuple[str, ...
             raise InputError(f"{src.name}: no resources/plant.fmu", parameter="ssp")
         plant_fmu.write_bytes(data)
         robot = reload_fmu_robot(plant_fmu)
-    if robot is None:
-        raise InputError(f"{src.name}: its plant FMU records no robot", parameter="ssp")
-    controller, trajectory = loop_parts(robot, spec)
+        if robot is None:
+            raise InputError(f"{src.name}: its plant FMU records no robot", parameter="ssp")
+        copy = spec.reference_file
+        if copy is not None:  # the archive's copy of the waypoint or trajectory file, read as the exporter read it
+            data = read_resource(src, copy)
+            if data is None:
+                raise InputError(f"{src.name}: no {copy}, which its {NOTES} names", parameter="ssp")
+            local = Path(work) / Path(copy).name
+            local.write_bytes(data)
+            spec = replace(spec, **{"waypoints" if spec.waypoints is not None else "trajectory": str(local)})
+        controller, trajectory = loop_parts(robot, spec)
     n = robot.n
     outputs = [f"plant.q[{i + 1}]" for i in range(n)]
     checks: list[SspCheck] = []

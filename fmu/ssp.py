@@ -113,11 +113,12 @@ def _ssd(name: str, variant: str, components: Sequence[SspComponent], connection
 
 def write_ssp(path: str | os.PathLike[str], name: str, components: Sequence[SspComponent],
               connections: Sequence[SspConnection], *, start: float, stop: float, step: float,
-              extra: Mapping[str, str] | None = None) -> Path:
+              extra: Mapping[str, str | bytes] | None = None) -> Path:
     """Write the SSP 1.0 archive ``path`` (``.ssp``) of ``components`` and ``connections``.
 
     ``start``, ``stop`` and ``step`` (s) are the default experiment and the fixed communication step;
-    ``extra`` maps archive paths under ``resources/`` to text files added as they are (the exporter's notes).
+    ``extra`` maps archive paths under ``resources/`` to files (text or bytes) added as they are (the exporter's
+    notes, a copy of its reference file).
     Every component with parameter sets has the same set names, :data:`NOMINAL` among them.
 
     Raises

@@ -58,7 +58,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
     for v in variants:
         variant_plant(robot, v.values)  # an unknown parameter or a bad value: refused before the build
     spec = LoopSpec(kind=kind, bandwidth=args.bandwidth, damping=args.damping, phase_margin=args.phase_margin,
-                    rate_hz=args.rate, task=args.task, segment_time=args.segment_time, variants=variants)
+                    rate_hz=args.rate, task=args.task, segment_time=args.segment_time, variants=variants,
+                    waypoints=args.waypoints, trajectory=args.trajectory)
     controller, trajectory = loop_parts(robot, spec)
     out_file(args.output, "--output")
     path = export_loop_ssp(robot, controller, trajectory, target, variants=variants, notes=spec, say=_say)
@@ -93,8 +94,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--damping", type=float, default=None, metavar="Z", help="damping ratio (default 0.7)")
     g.add_argument("--phase-margin", type=float, default=None, metavar="DEG", help="phase margin instead, deg")
     p.add_argument("--rate", type=float, default=None, metavar="HZ", help="control rate, Hz (default 1000)")
-    p.add_argument("--task", default=None, help="a [[tasks]] entry of the robot file or 'tour' (default: the "
-                                                "file's first task, else tour)")
+    src = p.add_mutually_exclusive_group()  # the reference options of manip track
+    src.add_argument("--task", default=None, help="a [[tasks]] entry of the robot file or 'tour' (default: the "
+                                                  "file's first task, else tour)")
+    src.add_argument("--waypoints", default=None, metavar="FILE", help="TOML or CSV joint waypoint file")
+    src.add_argument("--trajectory", default=None, metavar="FILE.csv",
+                     help="trajectory file: time, q_<joint>.., qd_<joint>.., qdd_<joint>.. (manip retime, manip "
+                          "excite); a copy goes into the SSP")
     p.add_argument("--segment-time", type=float, default=None, metavar="S", help="duration of every segment, s")
     p.add_argument("--variant", action="append", default=None, metavar="NAME=VALUE[,...]",
                    help="a plant parameter set besides the nominal one, e.g. payload_mass=2 (repeatable)")
