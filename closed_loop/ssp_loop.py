@@ -153,21 +153,11 @@ def loop_reference(robot: Robot, spec: LoopSpec) -> Trajectory:
         A bad file (naming it, the line and the joint).
     """
     from control_design.errors import DesignSpecError
-    from control_design.reference import check_trajectory_limits, task_trajectory
+    from control_design.reference import reference_trajectory
 
     if spec.waypoints is not None and spec.trajectory is not None:
         raise DesignSpecError("expected a waypoint file or a trajectory file, not both", parameter="trajectory")
-    if spec.trajectory is not None:
-        from model.trajectory_file import read_trajectory
-
-        if spec.segment_time is not None:
-            raise DesignSpecError("a --trajectory file carries its own times; give one or the other",
-                                  parameter="segment_time")
-        traj = read_trajectory(spec.trajectory, robot.description)
-    else:
-        traj = task_trajectory(robot, spec.task, spec.waypoints, spec.segment_time)
-    check_trajectory_limits(robot, traj)
-    return traj
+    return reference_trajectory(robot, spec.task, spec.waypoints, spec.trajectory, spec.segment_time)
 
 
 def loop_parts(robot: Robot, spec: LoopSpec) -> tuple[Controller, Trajectory]:

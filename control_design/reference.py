@@ -122,6 +122,34 @@ def _grid_step(T: float, dt: float) -> float:
     return T / math.ceil(T / dt - 1e-9)
 
 
+def reference_trajectory(robot: Robot, task: str | None, waypoints: str | Path | None = None,
+                         trajectory: str | Path | None = None, segment_time: float | None = None) -> Trajectory:
+    """The reference a user names for a closed loop (``manip track``, ``manip export-ssp``), limits checked.
+
+    A ``trajectory`` file (``manip retime``, ``manip excite``) is taken with its own samples; otherwise the
+    ``task`` or ``waypoints`` through :func:`task_trajectory`. Then :func:`check_trajectory_limits`.
+
+    Raises
+    ------
+    control_design.errors.DesignSpecError
+        A trajectory file with a segment time.
+    model.tasks.WaypointError, model.trajectory_file.TrajectoryFileError
+        A bad file (naming it, the line and the joint).
+    """
+    if trajectory is not None:
+        from control_design.errors import DesignSpecError
+        from model.trajectory_file import read_trajectory
+
+        if segment_time is not None:
+            raise DesignSpecError("a --trajectory file carries its own times; give one or the other",
+                                  parameter="segment_time")
+        traj = read_trajectory(trajectory, robot.description)
+    else:
+        traj = task_trajectory(robot, task, waypoints, segment_time)
+    check_trajectory_limits(robot, traj)
+    return traj
+
+
 def check_trajectory_limits(robot: Robot, traj: Trajectory, tol: float = 1e-9) -> None:
     """Raise :class:`TrajectoryLimitError` if any sample of ``traj`` leaves ``robot.qlim``.
 

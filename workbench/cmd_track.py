@@ -85,7 +85,7 @@ def run_track(args: argparse.Namespace) -> int:
     from control_design.computed_torque import ModelMismatch, plant_with_mismatch
     from control_design.design import design_robot
     from control_design.errors import DesignSpecError
-    from control_design.reference import check_trajectory_limits, reference_task_name, reference_task_rule, task_trajectory
+    from control_design.reference import reference_task_name, reference_task_rule, reference_trajectory
     from model.robot import load_robot
 
     kind = controller_kind(args.controller, extra=("cascade",))
@@ -96,17 +96,10 @@ def run_track(args: argparse.Namespace) -> int:
     check_out_dir(args.out)
     robot = load_robot(args.robot)
     if args.trajectory is not None:  # a trajectory file (manip retime, manip excite): its samples as they are
-        from model.trajectory_file import read_trajectory
-
-        if args.segment_time is not None:
-            raise DesignSpecError("a --trajectory file carries its own times; give one or the other",
-                                  parameter="segment_time")
-        traj = read_trajectory(args.trajectory, robot.description)
         task = str(args.trajectory)
     else:
         task = reference_task_name(robot) if args.task is None and args.waypoints is None else args.task
-        traj = task_trajectory(robot, task, args.waypoints, args.segment_time)
-    check_trajectory_limits(robot, traj)
+    traj = reference_trajectory(robot, task, args.waypoints, args.trajectory, args.segment_time)
     if kind == "cascade":
         return _run_cascade(args, robot, traj, task)
     if args.rate is None:

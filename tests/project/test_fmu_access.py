@@ -44,6 +44,7 @@ ZIP_ALLOWED: dict[str, str] = {
     "fmu/ssp.py": "writes and reads SSP archives, not FMUs",
     "workbench/replay.py": "sizes a NumPy .npz replay archive before np.load, not an FMU",
     "tests/project/test_packaging.py": "reads the built wheel and sdist, not FMUs",
+    "tests/workbench/test_cli_ssp_reference.py": "reads the reference file copied into an SSP archive, not an FMU",
     "tests/workbench/test_cli_ssp.py": "rewrites an SSP archive (SystemStructure.ssd) to corrupt it, not an FMU",
     "tests/model/test_hostile_input.py": "writes hostile FMU archives (links, bombs, absolute paths) the archive "
                                          "check must refuse, and checks the samples themselves",
