@@ -3,21 +3,12 @@ negative control: validate-ssp must see a parameter set that is not the one its 
 
 from __future__ import annotations
 
-import contextlib
-import io
 import re
 import zipfile
 
 import pytest
 
-from workbench.cli import main
-
-
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
+from tests.support.cli import run_cli as _run
 
 
 @pytest.fixture(scope="module")

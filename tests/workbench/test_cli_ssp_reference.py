@@ -9,8 +9,6 @@ file gives the very line (exit 2) that ``manip track`` gives.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import zipfile
 from pathlib import Path
 
@@ -24,14 +22,7 @@ from closed_loop.ssp_loop import NOTES, REFERENCE_FILE, LoopSpec, loop_reference
 from control_design.reference import task_trajectory
 from model.robot import load_robot
 from model.trajectory_file import read_trajectory
-from workbench.cli import main
-
-
-def _run(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        status = main(argv)
-    return status, out.getvalue(), err.getvalue()
+from tests.support.cli import run_cli as _run
 
 
 @pytest.fixture(scope="module")
