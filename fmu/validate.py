@@ -37,7 +37,7 @@ from model.limits import MAX_SAMPLES
 
 from .archive import check_fmu_archive
 from .inspection import binary_problems, internal_step, model_description_problems
-from .numeric_checks import (ME_RTOL, TOLERANCES, RoundTrip, TrackingError, directional_derivative_error,
+from .numeric_checks import (ME_RTOL, TOLERANCES, TRACKED, RoundTrip, TrackingError, directional_derivative_error,
                              state_roundtrip, tracking_checks, tracking_error)
 from .opened import open_fmu
 from .reference import (DIVERGENCE_GAIN, REFERENCE_REFINEMENT, TorqueProfile, divergence_horizon,
@@ -91,7 +91,7 @@ def _not_run(what: str, exc: Exception) -> str:
 
 
 def _tracked(kind: str) -> list[str]:
-    return [f"{kind} {figure}" for figure in ("q", "qd", "tool")]
+    return [f"{kind} {figure}" for figure in TRACKED]
 
 
 def validate_fmu(fmu_path: str | os.PathLike[str], *, t_end: float = 3.0, step: float = 1e-3,
