@@ -61,6 +61,7 @@ class Instance:
         self.messages: list[tuple[str, str, str]] = []  # (status, category, message) in arrival order
         self.raw: Any = None                            # FMPy's object, after instantiate()
         self._live = False
+        self._terminated = False
         self._callbacks: Any = None
 
     # ------------------------------------------------------------------ the choke point
@@ -176,8 +177,9 @@ class Instance:
         return self
 
     def terminate(self) -> None:
-        """``fmi*Terminate`` (raises on a refused call)."""
+        """``fmi*Terminate`` (raises on a refused call); :meth:`close` then only frees the instance."""
         self.call("terminate")
+        self._terminated = True
 
     def close(self) -> None:
         """Terminate (a refusal from an instance in error state is ignored) and free; unload the library."""
@@ -191,7 +193,8 @@ class Instance:
             return
         self._live = False
         try:
-            raw.terminate()
+            if not self._terminated:
+                raw.terminate()
         except FMICallException:
             pass  # an instance in Error or Terminated state refuses it; it is freed all the same
         finally:
